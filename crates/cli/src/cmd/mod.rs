@@ -1,0 +1,5 @@
+//! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<u8>`.
+
+pub mod bench_hddl;
+pub mod plan;
+pub mod validate;

@@ -1,0 +1,66 @@
+//! `htngtp`: the command-line front end. Each subcommand lives in its own module under `cmd/`;
+//! this file only parses arguments and maps outcomes to exit codes.
+
+mod cmd;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Exit codes shared by every subcommand.
+pub mod exit {
+    /// A plan was found (or the command succeeded).
+    pub const OK: u8 = 0;
+    /// The problem is proven unsolvable (or a checked plan is invalid).
+    pub const UNSOLVABLE: u8 = 1;
+    /// A time, node or memory limit stopped the search.
+    pub const LIMIT: u8 = 2;
+    /// Bad input: unreadable or malformed files, unknown names, bad arguments.
+    pub const BAD_INPUT: u8 = 3;
+}
+
+#[derive(Parser)]
+#[command(
+    name = "htngtp",
+    version,
+    about = "A combined HTN and geometric task planner for robots that work among people",
+    after_help = "Exit codes: 0 plan found / success, 1 proven unsolvable (or plan invalid), \
+                  2 limit reached, 3 bad input."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Plan an HDDL problem (optionally with a 3D scene for geometric tasks).
+    Plan(cmd::plan::Args),
+    /// Check a plan in the competition format against a domain and problem.
+    Validate(cmd::validate::Args),
+    /// Run every problem under a benchmark directory and report coverage.
+    BenchHddl(cmd::bench_hddl::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { exit::BAD_INPUT } else { exit::OK };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    let result = match cli.command {
+        Command::Plan(args) => cmd::plan::run(args),
+        Command::Validate(args) => cmd::validate::run(args),
+        Command::BenchHddl(args) => cmd::bench_hddl::run(args),
+    };
+    match result {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(exit::BAD_INPUT)
+        }
+    }
+}

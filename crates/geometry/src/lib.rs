@@ -1,0 +1,2 @@
+//! The 3D world: scenes, robot and human models, kinematics, collision, pixel visibility,
+//! effort levels and the shared literals derived from geometry.
