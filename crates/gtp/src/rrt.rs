@@ -1,0 +1,624 @@
+//! RRT-Connect in an arm's joint space, with edges checked at a fixed resolution and shortcut
+//! smoothing of the path found.
+//!
+//! The planner knows nothing of geometry: it takes the joint limits (continuous joints wrap
+//! around) and a validity check, a closure over one configuration. It is deterministic for a
+//! seed.
+
+use std::f32::consts::{PI, TAU};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+/// The joint space of an arm: one entry per joint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointSpace {
+    /// Lower limits (ignored for continuous joints).
+    pub lower: Vec<f32>,
+    /// Upper limits (ignored for continuous joints).
+    pub upper: Vec<f32>,
+    /// Whether each joint turns without limits; distances and interpolation wrap around.
+    pub continuous: Vec<bool>,
+}
+
+impl JointSpace {
+    /// A joint space from per-joint `(lower, upper, continuous)`.
+    pub fn new(joints: &[(f32, f32, bool)]) -> JointSpace {
+        JointSpace {
+            lower: joints.iter().map(|j| j.0).collect(),
+            upper: joints.iter().map(|j| j.1).collect(),
+            continuous: joints.iter().map(|j| j.2).collect(),
+        }
+    }
+
+    /// Number of joints.
+    pub fn dim(&self) -> usize {
+        self.lower.len()
+    }
+
+    /// The per-joint difference `b - a`, the short way round for continuous joints.
+    pub fn delta(&self, a: &[f32], b: &[f32], out: &mut [f32]) {
+        for i in 0..a.len() {
+            let mut d = b[i] - a[i];
+            if self.continuous[i] {
+                d = wrap(d);
+            }
+            out[i] = d;
+        }
+    }
+
+    /// Euclidean distance in joint space (the short way round for continuous joints).
+    pub fn distance(&self, a: &[f32], b: &[f32]) -> f32 {
+        let mut s = 0.0;
+        for i in 0..a.len() {
+            let mut d = b[i] - a[i];
+            if self.continuous[i] {
+                d = wrap(d);
+            }
+            s += d * d;
+        }
+        s.sqrt()
+    }
+
+    /// The largest per-joint difference (the short way round for continuous joints).
+    pub fn max_delta(&self, a: &[f32], b: &[f32]) -> f32 {
+        let mut m: f32 = 0.0;
+        for i in 0..a.len() {
+            let mut d = b[i] - a[i];
+            if self.continuous[i] {
+                d = wrap(d);
+            }
+            m = m.max(d.abs());
+        }
+        m
+    }
+
+    /// `a + t (b - a)` along the short way, continuous joints normalised to `[-pi, pi)`.
+    pub fn interpolate(&self, a: &[f32], b: &[f32], t: f32, out: &mut [f32]) {
+        for i in 0..a.len() {
+            if self.continuous[i] {
+                out[i] = wrap(a[i] + t * wrap(b[i] - a[i]));
+            } else {
+                out[i] = a[i] + t * (b[i] - a[i]);
+            }
+        }
+    }
+
+    /// Whether `q` is within the limits (continuous joints always are).
+    pub fn within_limits(&self, q: &[f32]) -> bool {
+        q.len() == self.dim()
+            && (0..q.len()).all(|i| {
+                self.continuous[i] || (q[i] >= self.lower[i] - 1e-5 && q[i] <= self.upper[i] + 1e-5)
+            })
+    }
+
+    /// A uniformly random configuration within the limits.
+    pub fn sample(&self, rng: &mut fastrand::Rng, out: &mut [f32]) {
+        for (i, q) in out.iter_mut().enumerate() {
+            *q = if self.continuous[i] {
+                rng.f32() * TAU - PI
+            } else {
+                self.lower[i] + rng.f32() * (self.upper[i] - self.lower[i])
+            };
+        }
+    }
+}
+
+/// An angle difference folded into `[-pi, pi)`.
+fn wrap(a: f32) -> f32 {
+    (a + PI).rem_euclid(TAU) - PI
+}
+
+/// Limits and settings of one RRT-Connect query.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RrtParams {
+    /// Largest per-joint step (radians or metres) between two configurations checked on an edge.
+    pub resolution: f32,
+    /// Longest extension of a tree towards a sample (joint-space distance).
+    pub max_step: f32,
+    /// The query fails after this many tree nodes (both trees together).
+    pub max_nodes: usize,
+    /// The query fails after this long.
+    pub time_limit: Duration,
+    /// Shortcut attempts on the path found.
+    pub shortcut_iterations: usize,
+    /// Shortcuts and the final path are checked at `resolution / certify_factor`, so that the
+    /// path returned stays valid when re-checked that much finer (1: no certification).
+    pub certify_factor: u32,
+}
+
+impl Default for RrtParams {
+    fn default() -> Self {
+        RrtParams {
+            resolution: 0.05,
+            max_step: 0.6,
+            max_nodes: 5000,
+            time_limit: Duration::from_millis(500),
+            shortcut_iterations: 60,
+            certify_factor: 4,
+        }
+    }
+}
+
+/// Why a query found no path.
+#[derive(Clone, Debug, PartialEq, thiserror::Error, Serialize, Deserialize)]
+pub enum RrtError {
+    /// The start configuration is in collision or out of limits.
+    #[error("the start configuration is invalid (in collision or out of limits)")]
+    InvalidStart,
+    /// The goal configuration is in collision or out of limits.
+    #[error("the goal configuration is invalid (in collision or out of limits)")]
+    InvalidGoal,
+    /// The trees reached the node limit without connecting.
+    #[error("no path within {0} nodes")]
+    NodeLimit(usize),
+    /// The time limit passed without the trees connecting.
+    #[error("no path within {0:?}")]
+    TimeLimit(Duration),
+    /// Every path found cut a corner through an obstacle between the checks at the search
+    /// resolution (found when re-checking it finer).
+    #[error("the path found fails when re-checked at {0} finer resolution")]
+    Certification(u32),
+    /// Start and goal have a different number of joints than the space.
+    #[error("configuration has {got} joints, the space has {expected}")]
+    Dimension { expected: usize, got: usize },
+}
+
+/// What one query did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RrtStats {
+    /// Tree nodes created (both trees).
+    pub nodes: usize,
+    /// Configurations checked for validity.
+    pub checks: usize,
+    /// Waypoints of the path before smoothing.
+    pub raw_waypoints: usize,
+}
+
+/// A path found by [`plan`]: waypoints from start to goal; consecutive waypoints are joined by
+/// straight joint-space edges that were checked at the query's resolution.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointPath {
+    /// Waypoints, start first, goal last.
+    pub waypoints: Vec<Vec<f32>>,
+}
+
+impl JointPath {
+    /// Joint-space length of the path.
+    pub fn length(&self, space: &JointSpace) -> f32 {
+        self.waypoints
+            .windows(2)
+            .map(|w| space.distance(&w[0], &w[1]))
+            .sum()
+    }
+
+    /// The path's configurations with at most `resolution` per joint between consecutive ones.
+    pub fn densify(&self, space: &JointSpace, resolution: f32) -> Vec<Vec<f32>> {
+        let mut out = Vec::new();
+        if let Some(first) = self.waypoints.first() {
+            out.push(first.clone());
+        }
+        let mut q = vec![0.0; space.dim()];
+        for w in self.waypoints.windows(2) {
+            let steps = (space.max_delta(&w[0], &w[1]) / resolution).ceil().max(1.0) as usize;
+            for s in 1..=steps {
+                space.interpolate(&w[0], &w[1], s as f32 / steps as f32, &mut q);
+                out.push(q.clone());
+            }
+        }
+        out
+    }
+}
+
+/// Whether the straight edge `a -> b` is valid, checked every `resolution` per joint (the
+/// end `b` included, `a` assumed checked). Counts the checks in `checks`.
+pub fn edge_valid(
+    space: &JointSpace,
+    a: &[f32],
+    b: &[f32],
+    resolution: f32,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    checks: &mut usize,
+) -> bool {
+    let steps = (space.max_delta(a, b) / resolution).ceil().max(1.0) as usize;
+    let mut q = vec![0.0; space.dim()];
+    // Check the far end first, then bisect: collisions are found sooner than by a sweep.
+    let mut order: Vec<usize> = Vec::with_capacity(steps);
+    order.push(steps);
+    let mut stride = steps.next_power_of_two();
+    while stride > 1 {
+        let half = stride / 2;
+        let mut k = half;
+        while k < steps {
+            if (k / half) % 2 == 1 {
+                order.push(k);
+            }
+            k += half;
+        }
+        stride = half;
+    }
+    for k in order {
+        space.interpolate(a, b, k as f32 / steps as f32, &mut q);
+        *checks += 1;
+        if !valid(&q) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Node storage of one tree: flat configurations and parent indices.
+struct Tree {
+    dim: usize,
+    configs: Vec<f32>,
+    parents: Vec<usize>,
+}
+
+impl Tree {
+    fn new(root: &[f32]) -> Tree {
+        Tree {
+            dim: root.len(),
+            configs: root.to_vec(),
+            parents: vec![usize::MAX],
+        }
+    }
+    fn len(&self) -> usize {
+        self.parents.len()
+    }
+    fn get(&self, i: usize) -> &[f32] {
+        &self.configs[i * self.dim..(i + 1) * self.dim]
+    }
+    fn push(&mut self, q: &[f32], parent: usize) -> usize {
+        self.configs.extend_from_slice(q);
+        self.parents.push(parent);
+        self.len() - 1
+    }
+    fn nearest(&self, space: &JointSpace, q: &[f32]) -> usize {
+        let mut best = (f32::INFINITY, 0);
+        for i in 0..self.len() {
+            let d = space.distance(self.get(i), q);
+            if d < best.0 {
+                best = (d, i);
+            }
+        }
+        best.1
+    }
+    /// Root-to-node configurations.
+    fn branch(&self, mut i: usize) -> Vec<Vec<f32>> {
+        let mut out = Vec::new();
+        while i != usize::MAX {
+            out.push(self.get(i).to_vec());
+            i = self.parents[i];
+        }
+        out.reverse();
+        out
+    }
+}
+
+enum Extend {
+    Trapped,
+    Advanced(usize),
+    Reached(usize),
+}
+
+fn extend(
+    tree: &mut Tree,
+    space: &JointSpace,
+    target: &[f32],
+    params: &RrtParams,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    stats: &mut RrtStats,
+) -> Extend {
+    let near = tree.nearest(space, target);
+    let from = tree.get(near).to_vec();
+    let d = space.distance(&from, target);
+    let (to, reached) = if d <= params.max_step {
+        (target.to_vec(), true)
+    } else {
+        let mut q = vec![0.0; space.dim()];
+        space.interpolate(&from, target, params.max_step / d, &mut q);
+        (q, false)
+    };
+    if !edge_valid(
+        space,
+        &from,
+        &to,
+        params.resolution,
+        valid,
+        &mut stats.checks,
+    ) {
+        return Extend::Trapped;
+    }
+    let i = tree.push(&to, near);
+    stats.nodes += 1;
+    if reached {
+        Extend::Reached(i)
+    } else {
+        Extend::Advanced(i)
+    }
+}
+
+fn connect(
+    tree: &mut Tree,
+    space: &JointSpace,
+    target: &[f32],
+    params: &RrtParams,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    stats: &mut RrtStats,
+) -> Extend {
+    loop {
+        match extend(tree, space, target, params, valid, stats) {
+            Extend::Advanced(_) => continue,
+            other => return other,
+        }
+    }
+}
+
+/// Plans a path from `start` to `goal` with RRT-Connect, then smooths it by shortcuts.
+///
+/// `valid` says whether one configuration is free (collision checks, extra constraints). The
+/// direct edge is tried first. Both ends are checked. Deterministic for the state of `rng`.
+pub fn plan(
+    space: &JointSpace,
+    start: &[f32],
+    goal: &[f32],
+    mut valid: impl FnMut(&[f32]) -> bool,
+    params: &RrtParams,
+    rng: &mut fastrand::Rng,
+) -> Result<(JointPath, RrtStats), (RrtError, RrtStats)> {
+    let mut stats = RrtStats::default();
+    for q in [start, goal] {
+        if q.len() != space.dim() {
+            return Err((
+                RrtError::Dimension {
+                    expected: space.dim(),
+                    got: q.len(),
+                },
+                stats,
+            ));
+        }
+    }
+    stats.checks += 1;
+    if !space.within_limits(start) || !valid(start) {
+        return Err((RrtError::InvalidStart, stats));
+    }
+    stats.checks += 1;
+    if !space.within_limits(goal) || !valid(goal) {
+        return Err((RrtError::InvalidGoal, stats));
+    }
+    let fine = params.resolution / params.certify_factor.max(1) as f32;
+    if edge_valid(
+        space,
+        start,
+        goal,
+        params.resolution,
+        &mut valid,
+        &mut stats.checks,
+    ) && (params.certify_factor <= 1
+        || edge_valid(space, start, goal, fine, &mut valid, &mut stats.checks))
+    {
+        stats.raw_waypoints = 2;
+        return Ok((
+            JointPath {
+                waypoints: vec![start.to_vec(), goal.to_vec()],
+            },
+            stats,
+        ));
+    }
+    let began = Instant::now();
+    let mut a = Tree::new(start);
+    let mut b = Tree::new(goal);
+    let mut a_is_start = true;
+    let mut sample = vec![0.0; space.dim()];
+    loop {
+        if a.len() + b.len() >= params.max_nodes {
+            return Err((RrtError::NodeLimit(params.max_nodes), stats));
+        }
+        if began.elapsed() > params.time_limit {
+            return Err((RrtError::TimeLimit(params.time_limit), stats));
+        }
+        space.sample(rng, &mut sample);
+        let new = match extend(&mut a, space, &sample, params, &mut valid, &mut stats) {
+            Extend::Trapped => None,
+            Extend::Advanced(i) | Extend::Reached(i) => Some(i),
+        };
+        if let Some(i) = new {
+            let q = a.get(i).to_vec();
+            if let Extend::Reached(j) = connect(&mut b, space, &q, params, &mut valid, &mut stats) {
+                let (from_start, from_goal) = if a_is_start { (&a, i) } else { (&b, j) };
+                let (other, other_i) = if a_is_start { (&b, j) } else { (&a, i) };
+                let mut waypoints = from_start.branch(from_goal);
+                let mut tail = other.branch(other_i);
+                tail.pop(); // the meeting configuration, already last in `waypoints`
+                tail.reverse();
+                waypoints.extend(tail);
+                stats.raw_waypoints = waypoints.len();
+                let mut path = JointPath { waypoints };
+                shortcut(space, &mut path, params, &mut valid, rng, &mut stats.checks);
+                if params.certify_factor > 1 {
+                    let certified = path.waypoints.windows(2).all(|w| {
+                        edge_valid(space, &w[0], &w[1], fine, &mut valid, &mut stats.checks)
+                    });
+                    if !certified {
+                        return Err((RrtError::Certification(params.certify_factor), stats));
+                    }
+                }
+                return Ok((path, stats));
+            }
+        }
+        std::mem::swap(&mut a, &mut b);
+        a_is_start = !a_is_start;
+    }
+}
+
+/// Shortcut smoothing: repeatedly joins two random points of the path by a straight edge when
+/// that edge is valid, then drops waypoints made redundant. Shortcuts are checked at
+/// `resolution / certify_factor`: long straight edges are where corners get cut.
+pub fn shortcut(
+    space: &JointSpace,
+    path: &mut JointPath,
+    params: &RrtParams,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    rng: &mut fastrand::Rng,
+    checks: &mut usize,
+) {
+    let fine = params.resolution / params.certify_factor.max(1) as f32;
+    greedy_shortcut(space, path, fine, valid, checks);
+    // Random shortcuts between points inside edges.
+    let mut a = vec![0.0; space.dim()];
+    let mut b = vec![0.0; space.dim()];
+    for _ in 0..params.shortcut_iterations {
+        let n = path.waypoints.len();
+        if n < 3 {
+            break;
+        }
+        let i = rng.usize(0..n - 1);
+        let j = rng.usize(0..n - 1);
+        let (i, j) = (i.min(j), i.max(j));
+        if j <= i {
+            continue;
+        }
+        let (ti, tj) = (rng.f32(), rng.f32());
+        space.interpolate(&path.waypoints[i], &path.waypoints[i + 1], ti, &mut a);
+        space.interpolate(&path.waypoints[j], &path.waypoints[j + 1], tj, &mut b);
+        let old = space.distance(&a, &path.waypoints[i + 1])
+            + path.waypoints[i + 1..=j]
+                .windows(2)
+                .map(|w| space.distance(&w[0], &w[1]))
+                .sum::<f32>()
+            + space.distance(&path.waypoints[j], &b);
+        if space.distance(&a, &b) >= old - 1e-4 {
+            continue;
+        }
+        if edge_valid(space, &a, &b, fine, valid, checks) {
+            let mut w: Vec<Vec<f32>> = path.waypoints[..=i].to_vec();
+            w.push(a.clone());
+            w.push(b.clone());
+            w.extend_from_slice(&path.waypoints[j + 1..]);
+            path.waypoints = w;
+        }
+    }
+    greedy_shortcut(space, path, fine, valid, checks);
+}
+
+/// From each waypoint, jumps to the farthest later one reachable by a valid straight edge.
+fn greedy_shortcut(
+    space: &JointSpace,
+    path: &mut JointPath,
+    resolution: f32,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    checks: &mut usize,
+) {
+    let n = path.waypoints.len();
+    let mut out = vec![path.waypoints[0].clone()];
+    let mut i = 0;
+    while i + 1 < n {
+        let mut j = n - 1;
+        while j > i + 1
+            && !edge_valid(
+                space,
+                &path.waypoints[i],
+                &path.waypoints[j],
+                resolution,
+                valid,
+                checks,
+            )
+        {
+            j -= 1;
+        }
+        out.push(path.waypoints[j].clone());
+        i = j;
+    }
+    path.waypoints = out;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2-joint planar space with a wall at x in [0.4, 0.6] except a gap at y > 0.8.
+    fn wall(q: &[f32]) -> bool {
+        !(q[0] > 0.4 && q[0] < 0.6 && q[1] < 0.8)
+    }
+
+    #[test]
+    fn finds_a_path_through_the_gap_and_every_edge_is_valid() {
+        let space = JointSpace::new(&[(0.0, 1.0, false), (0.0, 1.0, false)]);
+        let params = RrtParams {
+            resolution: 0.01,
+            max_step: 0.2,
+            ..RrtParams::default()
+        };
+        let mut rng = fastrand::Rng::with_seed(3);
+        let (path, stats) =
+            plan(&space, &[0.1, 0.1], &[0.9, 0.1], wall, &params, &mut rng).unwrap();
+        assert!(stats.nodes > 0);
+        assert_eq!(path.waypoints.first().unwrap(), &vec![0.1, 0.1]);
+        assert_eq!(path.waypoints.last().unwrap(), &vec![0.9, 0.1]);
+        // Re-check at 4x finer resolution.
+        for q in path.densify(&space, params.resolution / 4.0) {
+            assert!(wall(&q), "path enters the wall at {q:?}");
+        }
+        assert!(path.waypoints.iter().any(|q| q[1] > 0.8));
+        // Smoothing leaves few waypoints: up, across, down.
+        assert!(
+            path.waypoints.len() <= 6,
+            "{} waypoints",
+            path.waypoints.len()
+        );
+    }
+
+    #[test]
+    fn same_seed_same_path() {
+        let space = JointSpace::new(&[(0.0, 1.0, false), (0.0, 1.0, false)]);
+        let params = RrtParams::default();
+        let run = |seed| {
+            let mut rng = fastrand::Rng::with_seed(seed);
+            plan(&space, &[0.1, 0.1], &[0.9, 0.1], wall, &params, &mut rng)
+                .unwrap()
+                .0
+        };
+        assert_eq!(run(5), run(5));
+    }
+
+    #[test]
+    fn continuous_joints_go_the_short_way_round() {
+        let space = JointSpace::new(&[(0.0, 0.0, true)]);
+        // Forbid the region around 0: from 3.0 to -3.0 the short way crosses pi, not 0.
+        let valid = |q: &[f32]| q[0].abs() > 0.5;
+        let mut rng = fastrand::Rng::with_seed(1);
+        let (path, _) = plan(
+            &space,
+            &[3.0],
+            &[-3.0],
+            valid,
+            &RrtParams::default(),
+            &mut rng,
+        )
+        .unwrap();
+        assert_eq!(path.waypoints.len(), 2);
+        assert!((path.length(&space) - (TAU - 6.0)).abs() < 1e-4);
+        for q in path.densify(&space, 0.01) {
+            assert!(q[0].abs() > 2.9);
+        }
+    }
+
+    #[test]
+    fn reports_invalid_ends_and_limits() {
+        let space = JointSpace::new(&[(0.0, 1.0, false), (0.0, 1.0, false)]);
+        let mut rng = fastrand::Rng::with_seed(1);
+        let p = RrtParams::default();
+        let e = plan(&space, &[0.5, 0.5], &[0.9, 0.1], wall, &p, &mut rng).unwrap_err();
+        assert_eq!(e.0, RrtError::InvalidStart);
+        let e = plan(&space, &[0.1, 0.1], &[1.5, 0.1], wall, &p, &mut rng).unwrap_err();
+        assert_eq!(e.0, RrtError::InvalidGoal);
+        // A closed wall: no path; the node limit stops the search.
+        let closed = |q: &[f32]| !(q[0] > 0.4 && q[0] < 0.6);
+        let p = RrtParams {
+            max_nodes: 300,
+            ..RrtParams::default()
+        };
+        let e = plan(&space, &[0.1, 0.1], &[0.9, 0.1], closed, &p, &mut rng).unwrap_err();
+        assert_eq!(e.0, RrtError::NodeLimit(300));
+    }
+}
