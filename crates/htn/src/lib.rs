@@ -6,3 +6,6 @@
 //! reach the world through a trait that the `hybrid` crate implements.
 
 pub mod model;
+pub mod parser;
+
+pub use parser::{ParseError, load_domain, load_problem, parse_domain, parse_problem};

@@ -108,9 +108,10 @@ pub enum CompareOp {
 }
 
 /// A precondition, method precondition, constraint or goal.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub enum Formula {
     /// The empty conjunction `()` or `(and)`.
+    #[default]
     True,
     Atom(Atom),
     /// `(= ?a ?b)` between objects.
@@ -244,12 +245,6 @@ pub struct TaskNetwork {
     /// The tasks in their one total order.
     pub subtasks: Vec<Subtask>,
     pub constraints: Formula,
-}
-
-impl Default for Formula {
-    fn default() -> Self {
-        Formula::True
-    }
 }
 
 /// An HDDL problem.

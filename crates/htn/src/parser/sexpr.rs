@@ -1,0 +1,206 @@
+//! Lexer and s-expression reader: HDDL text to a tree of atoms and lists with positions.
+//!
+//! Atoms are lower-cased (HDDL names are case-insensitive). Comments run from `;` to the end of
+//! the line. The reader is iterative and refuses nesting deeper than [`MAX_DEPTH`], so the
+//! recursive stages after it cannot overflow the stack whatever the input.
+
+use crate::model::{SourceName, Span};
+
+use super::error::ParseError;
+
+/// The deepest nesting of parentheses accepted. Real HDDL files nest fewer than 15 levels.
+pub const MAX_DEPTH: usize = 256;
+
+/// An s-expression with the position of its first character.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Sexp {
+    /// A symbol, variable, keyword or number, lower-cased.
+    Atom { text: String, span: Span },
+    /// A parenthesised list; `span` is its `(`.
+    List { items: Vec<Sexp>, span: Span },
+}
+
+impl Sexp {
+    pub(crate) fn span(&self) -> Span {
+        match self {
+            Sexp::Atom { span, .. } | Sexp::List { span, .. } => *span,
+        }
+    }
+
+    pub(crate) fn as_atom(&self) -> Option<&str> {
+        match self {
+            Sexp::Atom { text, .. } => Some(text),
+            Sexp::List { .. } => None,
+        }
+    }
+
+    pub(crate) fn as_list(&self) -> Option<&[Sexp]> {
+        match self {
+            Sexp::List { items, .. } => Some(items),
+            Sexp::Atom { .. } => None,
+        }
+    }
+
+    /// The head atom of a list, if it has one.
+    pub(crate) fn head(&self) -> Option<&str> {
+        self.as_list()
+            .and_then(|items| items.first())
+            .and_then(Sexp::as_atom)
+    }
+
+    /// A short description for error messages: the atom quoted, or the list's head.
+    pub(crate) fn describe(&self) -> String {
+        match self {
+            Sexp::Atom { text, .. } => format!("`{}`", shorten(text)),
+            Sexp::List { items, .. } => match items.first() {
+                None => "`()`".to_string(),
+                Some(Sexp::Atom { text, .. }) => format!("`({} ...)`", shorten(text)),
+                Some(Sexp::List { .. }) => "a list of lists".to_string(),
+            },
+        }
+    }
+}
+
+/// Cuts very long names in messages so one error stays one readable line.
+pub(crate) fn shorten(text: &str) -> String {
+    const MAX: usize = 60;
+    if text.chars().count() <= MAX {
+        text.to_string()
+    } else {
+        let cut: String = text.chars().take(MAX).collect();
+        format!("{cut}...")
+    }
+}
+
+fn is_delimiter(c: char) -> bool {
+    c.is_whitespace() || c == '(' || c == ')' || c == ';'
+}
+
+/// Reads all top-level s-expressions of `text`.
+pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseError> {
+    let mut top: Vec<Sexp> = Vec::new();
+    // Open lists: the span of their `(` and the items read so far.
+    let mut stack: Vec<(Span, Vec<Sexp>)> = Vec::new();
+    let mut line: u32 = 1;
+    let mut col: u32 = 1;
+    let mut chars = text.char_indices().peekable();
+
+    while let Some((start, c)) = chars.next() {
+        let span = Span { line, col };
+        match c {
+            '\n' => {
+                line = line.saturating_add(1);
+                col = 1;
+            }
+            ';' => {
+                // Skip to the end of the line; the newline itself is handled above.
+                while let Some(&(_, c)) = chars.peek() {
+                    if c == '\n' {
+                        break;
+                    }
+                    chars.next();
+                }
+            }
+            '(' => {
+                if stack.len() >= MAX_DEPTH {
+                    return Err(ParseError::new(
+                        file,
+                        span,
+                        format!("parentheses nested deeper than {MAX_DEPTH} levels"),
+                    ));
+                }
+                stack.push((span, Vec::new()));
+                col = col.saturating_add(1);
+            }
+            ')' => {
+                let Some((open, items)) = stack.pop() else {
+                    return Err(ParseError::new(
+                        file,
+                        span,
+                        "unexpected `)` with no matching `(`",
+                    ));
+                };
+                let list = Sexp::List { items, span: open };
+                match stack.last_mut() {
+                    Some((_, parent)) => parent.push(list),
+                    None => top.push(list),
+                }
+                col = col.saturating_add(1);
+            }
+            c if c.is_whitespace() => col = col.saturating_add(1),
+            _ => {
+                let mut end = start + c.len_utf8();
+                let mut width: u32 = 1;
+                while let Some(&(i, c)) = chars.peek() {
+                    if is_delimiter(c) {
+                        break;
+                    }
+                    end = i + c.len_utf8();
+                    width = width.saturating_add(1);
+                    chars.next();
+                }
+                let atom = Sexp::Atom {
+                    text: text
+                        .get(start..end)
+                        .unwrap_or_default()
+                        .to_ascii_lowercase(),
+                    span,
+                };
+                match stack.last_mut() {
+                    Some((_, parent)) => parent.push(atom),
+                    None => top.push(atom),
+                }
+                col = col.saturating_add(width);
+            }
+        }
+    }
+
+    if let Some((open, _)) = stack.last() {
+        return Err(ParseError::new(
+            file,
+            *open,
+            "this `(` is never closed (end of file reached)",
+        ));
+    }
+    Ok(top)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+    use std::sync::Arc;
+
+    fn file() -> SourceName {
+        Arc::new(PathBuf::from("t.hddl"))
+    }
+
+    #[test]
+    fn reads_nested_lists_with_positions_and_lowercases() {
+        let top = read("; c\n(A (b ?X) ;x\n\t:K)", &file()).unwrap();
+        assert_eq!(top.len(), 1);
+        let items = top[0].as_list().unwrap();
+        assert_eq!(top[0].span(), Span { line: 2, col: 1 });
+        assert_eq!(items[0].as_atom(), Some("a"));
+        assert_eq!(items[1].span(), Span { line: 2, col: 4 });
+        assert_eq!(items[1].as_list().unwrap()[1].as_atom(), Some("?x"));
+        assert_eq!(items[2].as_atom(), Some(":k"));
+        assert_eq!(items[2].span(), Span { line: 3, col: 2 });
+    }
+
+    #[test]
+    fn unbalanced_parentheses_are_located() {
+        let e = read("(a\n  (b)", &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (1, 1));
+        let e = read("(a))", &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (1, 4));
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        let text = "(".repeat(100_000);
+        let e = read(&text, &file()).unwrap_err();
+        assert!(e.message.contains("nested deeper"));
+        assert_eq!((e.line, e.col), (1, MAX_DEPTH as u32 + 1));
+    }
+}

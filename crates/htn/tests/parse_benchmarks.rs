@@ -1,0 +1,109 @@
+//! Every domain and problem file of the shared benchmark folders parses.
+//!
+//! The folders live beside the checkout (`../shared/benchmarks/`); when they are absent the
+//! tests say so on stderr and check nothing else.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use htn::parser::{domain_file_for, is_domain_file_name, load_domain, load_problem};
+
+fn benchmarks() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/benchmarks");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "SKIPPED: benchmark folder {} is absent; the benchmark parsing tests checked nothing",
+            dir.display()
+        );
+        None
+    }
+}
+
+/// All `.hddl` files under `dir`, sorted, leaving out `other/` folders (auxiliary material of
+/// the IPC collection: a hybrid-planning domain and PDDL variants, not part of the track) and
+/// `plans/` (expected plans; one of them carries the `.hddl` extension).
+fn hddl_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                if path
+                    .file_name()
+                    .is_some_and(|n| n != "other" && n != "plans")
+                {
+                    todo.push(path);
+                }
+            } else if path.extension().is_some_and(|e| e == "hddl") {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn parse_folder(dir: &Path) -> (usize, usize) {
+    let files = hddl_files(dir);
+    assert!(!files.is_empty(), "no .hddl files under {}", dir.display());
+    let mut failures = Vec::new();
+    let (mut domains, mut problems) = (0, 0);
+    for f in &files {
+        if is_domain_file_name(f) {
+            domains += 1;
+            if let Err(e) = load_domain(f) {
+                failures.push(e.to_string());
+            }
+            continue;
+        }
+        problems += 1;
+        let Some(dfile) = domain_file_for(f) else {
+            failures.push(format!("{}: no domain file found", f.display()));
+            continue;
+        };
+        match load_domain(&dfile) {
+            Ok(d) => {
+                if let Err(e) = load_problem(f, &d) {
+                    failures.push(e.to_string());
+                }
+            }
+            Err(e) => failures.push(e.to_string()),
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} files failed:\n{}",
+        failures.len(),
+        files.len(),
+        failures.join("\n")
+    );
+    (domains, problems)
+}
+
+#[test]
+fn every_ipc2020_total_order_file_parses() {
+    let Some(b) = benchmarks() else { return };
+    let start = Instant::now();
+    let (d, p) = parse_folder(&b.join("ipc2020-total-order"));
+    eprintln!(
+        "parsed {d} domains and {p} problems in {:?}",
+        start.elapsed()
+    );
+    assert!(
+        d >= 18 && p >= 300,
+        "suspiciously few files: {d} domains, {p} problems"
+    );
+}
+
+#[test]
+fn every_feature_test_file_parses() {
+    let Some(b) = benchmarks() else { return };
+    let (d, p) = parse_folder(&b.join("ipc2020-feature-tests"));
+    assert!(
+        d >= 10 && p >= 9,
+        "suspiciously few files: {d} domains, {p} problems"
+    );
+}
