@@ -5,3 +5,5 @@ pub mod grasp;
 pub mod gripper;
 pub mod placement;
 pub mod rrt;
+pub mod stats;
+pub mod task;
