@@ -1,0 +1,219 @@
+// three.js objects for a plan's scene: one group per object and per agent link, built from the
+// contract's shapes (box, cylinder with axis z, capsule between two points, triangle mesh), and
+// posed from `Pose`s. World frame: z up, metres.
+
+import * as THREE from 'three';
+import { CSS2DObject } from 'three/addons/renderers/CSS2DRenderer.js';
+import type { Color, Plan, Pose, Shape } from './plan';
+import type { WorldState } from './timeline';
+
+const DEFAULT_OBJECT_COLOR: Color = [0.7, 0.7, 0.7];
+const DEFAULT_ROBOT_COLOR: Color = [0.8, 0.8, 0.82];
+const DEFAULT_HUMAN_COLOR: Color = [0.85, 0.7, 0.6];
+const HIGHLIGHT = new THREE.Color(0xffb000);
+
+/** The built scene: groups by name, so that states can be applied and read back. */
+export class SceneView {
+  readonly root = new THREE.Group();
+  readonly objectsGroup = new THREE.Group();
+  readonly agentsGroup = new THREE.Group();
+  readonly objects = new Map<string, THREE.Group>();
+  readonly links = new Map<string, Map<string, THREE.Group>>();
+  private readonly materials: THREE.MeshStandardMaterial[] = [];
+  private readonly geometries: THREE.BufferGeometry[] = [];
+  private readonly labels: CSS2DObject[] = [];
+  private highlighted = new Set<string>();
+
+  constructor(plan: Plan) {
+    this.root.name = 'plan';
+    this.objectsGroup.name = 'objects';
+    this.agentsGroup.name = 'agents';
+    this.root.add(this.objectsGroup, this.agentsGroup);
+
+    for (const o of plan.scene.objects) {
+      const g = new THREE.Group();
+      g.name = o.name;
+      const mesh = this.mesh(o.shape, o.color ?? DEFAULT_OBJECT_COLOR, o.movable);
+      g.add(mesh);
+      g.userData = { movable: o.movable };
+      applyPose(g, o.pose);
+      // The label floats above the object's top, in the object's frame.
+      const top = new THREE.Box3().setFromObject(mesh).max.z;
+      this.label(g, o.name, top + 0.06, o.movable ? 'label movable' : 'label');
+      this.objectsGroup.add(g);
+      this.objects.set(o.name, g);
+    }
+    for (const a of plan.scene.agents) {
+      const agentGroup = new THREE.Group();
+      agentGroup.name = a.name;
+      const byLink = new Map<string, THREE.Group>();
+      const fallback = a.kind === 'human' ? DEFAULT_HUMAN_COLOR : DEFAULT_ROBOT_COLOR;
+      for (const l of a.links) {
+        const g = new THREE.Group();
+        g.name = `${a.name}/${l.name}`;
+        for (const s of l.shapes) {
+          const m = this.mesh(s.shape, s.color ?? fallback, true);
+          applyPose(m, s.pose);
+          g.add(m);
+        }
+        applyPose(g, a.link_poses[l.name]!);
+        agentGroup.add(g);
+        byLink.set(l.name, g);
+      }
+      // The agent's name floats above its highest link.
+      const labelLink = a.eye_link ?? a.links[0]?.name;
+      const anchor = labelLink === undefined ? undefined : byLink.get(labelLink);
+      if (anchor !== undefined) {
+        const lbl = this.label(new THREE.Group(), a.name, 0, `label agent ${a.kind}`);
+        lbl.userData = { follow: anchor };
+        agentGroup.add(lbl.parent!);
+      }
+      this.agentsGroup.add(agentGroup);
+      this.links.set(a.name, byLink);
+    }
+  }
+
+  private label(parent: THREE.Object3D, text: string, z: number, cls: string): CSS2DObject {
+    const div = document.createElement('div');
+    div.className = cls;
+    div.textContent = text;
+    const obj = new CSS2DObject(div);
+    obj.position.set(0, 0, z);
+    obj.center.set(0.5, 1);
+    parent.add(obj);
+    this.labels.push(obj);
+    return obj;
+  }
+
+  private mesh(shape: Shape, color: Color, small: boolean): THREE.Mesh {
+    const geometry = geometryOf(shape);
+    this.geometries.push(geometry);
+    const material = new THREE.MeshStandardMaterial({
+      color: new THREE.Color(color[0], color[1], color[2]),
+      roughness: small ? 0.55 : 0.8,
+      metalness: 0.05,
+      flatShading: 'mesh' in shape || 'box' in shape,
+    });
+    this.materials.push(material);
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.castShadow = true;
+    mesh.receiveShadow = true;
+    return mesh;
+  }
+
+  /** Moves every object and link to the state's poses; highlights the named objects. */
+  apply(state: WorldState, highlight: Set<string>): void {
+    for (const [name, pose] of state.objects) {
+      const g = this.objects.get(name);
+      if (g !== undefined) applyPose(g, pose);
+    }
+    for (const [agent, poses] of state.links) {
+      const byLink = this.links.get(agent);
+      if (byLink === undefined) continue;
+      for (const [name, pose] of poses) {
+        const g = byLink.get(name);
+        if (g !== undefined) applyPose(g, pose);
+      }
+    }
+    for (const lbl of this.labels) {
+      const follow = lbl.userData['follow'] as THREE.Object3D | undefined;
+      if (follow !== undefined) lbl.position.copy(follow.position).add(new THREE.Vector3(0, 0, 0.35));
+    }
+    if (!sameSet(highlight, this.highlighted)) {
+      for (const [name, g] of this.objects) {
+        const on = highlight.has(name);
+        g.traverse((o) => {
+          if (o instanceof THREE.Mesh && o.material instanceof THREE.MeshStandardMaterial) {
+            o.material.emissive.copy(on ? HIGHLIGHT : new THREE.Color(0));
+            o.material.emissiveIntensity = on ? 0.35 : 0;
+          }
+          if (o instanceof CSS2DObject) o.element.classList.toggle('active', on);
+        });
+      }
+      this.highlighted = new Set(highlight);
+    }
+  }
+
+  /** The rendered pose of an object (what the page shows), or null for an unknown name. */
+  objectPose(name: string): Pose | null {
+    const g = this.objects.get(name);
+    return g === undefined ? null : poseOf(g);
+  }
+
+  linkPose(agent: string, link: string): Pose | null {
+    const g = this.links.get(agent)?.get(link);
+    return g === undefined ? null : poseOf(g);
+  }
+
+  get linkCount(): number {
+    let n = 0;
+    for (const m of this.links.values()) n += m.size;
+    return n;
+  }
+
+  dispose(): void {
+    this.root.removeFromParent();
+    for (const l of this.labels) l.element.remove();
+    for (const g of this.geometries) g.dispose();
+    for (const m of this.materials) m.dispose();
+  }
+}
+
+export function applyPose(o: THREE.Object3D, p: Pose): void {
+  o.position.set(p.t[0], p.t[1], p.t[2]);
+  o.quaternion.set(p.q[0], p.q[1], p.q[2], p.q[3]);
+}
+
+function poseOf(o: THREE.Object3D): Pose {
+  return {
+    t: [o.position.x, o.position.y, o.position.z],
+    q: [o.quaternion.x, o.quaternion.y, o.quaternion.z, o.quaternion.w],
+  };
+}
+
+function sameSet(a: Set<string>, b: Set<string>): boolean {
+  if (a.size !== b.size) return false;
+  for (const x of a) if (!b.has(x)) return false;
+  return true;
+}
+
+/** Geometry of a shape in its own frame (three.js cylinders and capsules run along y: turned to z). */
+export function geometryOf(shape: Shape): THREE.BufferGeometry {
+  if ('box' in shape) {
+    const [x, y, z] = shape.box.half_extents;
+    return new THREE.BoxGeometry(2 * x, 2 * y, 2 * z);
+  }
+  if ('cylinder' in shape) {
+    const { radius, half_height } = shape.cylinder;
+    const g = new THREE.CylinderGeometry(radius, radius, 2 * half_height, 40);
+    g.rotateX(Math.PI / 2);
+    return g;
+  }
+  if ('capsule' in shape) {
+    const { a, b, radius } = shape.capsule;
+    const va = new THREE.Vector3(...a);
+    const vb = new THREE.Vector3(...b);
+    const axis = vb.clone().sub(va);
+    const length = axis.length();
+    const g = new THREE.CapsuleGeometry(radius, length, 8, 20);
+    if (length > 1e-9) {
+      g.applyQuaternion(new THREE.Quaternion().setFromUnitVectors(new THREE.Vector3(0, 1, 0), axis.normalize()));
+    }
+    const mid = va.add(vb).multiplyScalar(0.5);
+    g.translate(mid.x, mid.y, mid.z);
+    return g;
+  }
+  const { vertices, triangles } = shape.mesh;
+  // Non-indexed, so that computed normals are per face: furniture edges stay crisp.
+  const pos = new Float32Array(triangles.length * 9);
+  triangles.forEach((tri, i) => {
+    for (let k = 0; k < 3; k++) {
+      const v = vertices[tri[k]!]!;
+      pos.set(v, i * 9 + k * 3);
+    }
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.computeVertexNormals();
+  return g;
+}
