@@ -107,3 +107,19 @@ fn every_feature_test_file_parses() {
         "suspiciously few files: {d} domains, {p} problems"
     );
 }
+
+#[test]
+fn the_hybrid_domain_in_other_is_refused_with_a_clear_error() {
+    let Some(b) = benchmarks() else { return };
+    let f = b.join(
+        "ipc2020-total-order/AssemblyHierarchical/other/Hybrid_Domain/verkabelung_domain_noComplexOperations.hddl",
+    );
+    if !f.is_file() {
+        eprintln!("SKIPPED: {} is absent", f.display());
+        return;
+    }
+    let e = load_domain(&f).unwrap_err();
+    eprintln!("{e}");
+    assert!(e.message.contains("hybrid"), "{e}");
+    assert!(e.line > 0 && e.col > 0);
+}
