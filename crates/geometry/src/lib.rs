@@ -2,3 +2,5 @@
 //! effort levels and the shared literals derived from geometry.
 pub mod agent;
 pub mod kinematics;
+pub mod ik;
+pub mod collision;

@@ -191,3 +191,144 @@ fn human_arm_reach_is_070() {
     // The hand frame's x points along the arm.
     assert!(close(hand.rotation * Vector::X, Vector::X, 1e-4));
 }
+
+mod ik {
+    use super::*;
+    use geometry::ik::{IkError, IkOptions, solve_ik};
+
+    /// Rotation angle between two orientations.
+    fn angle(a: Rotation, b: Rotation) -> f32 {
+        let d = a * b.inverse();
+        2.0 * d.w.abs().min(1.0).acos()
+    }
+
+    /// FK(IK(pose)) within 1 mm / 0.01 rad for 100 seeded reachable poses (poses from FK of
+    /// random in-limit arm configurations), solutions within the joint limits.
+    fn round_trips(file: &str, chain_name: &str, seed: u64) {
+        let m = model(file);
+        let chain = m.chain(chain_name).unwrap();
+        let tip = &m.links()[chain.tip_link].name;
+        let base = Pose::from_parts(Vector::new(0.5, -1.0, 0.0), Rotation::from_rotation_z(0.3));
+        let rest = m.default_configuration();
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let mut solved = 0;
+        for _ in 0..100 {
+            let mut q = rest.as_slice().to_vec();
+            let random = m.random_configuration(&mut rng);
+            for &d in &chain.dofs {
+                q[d] = random.as_slice()[d];
+            }
+            let target = m.link_pose(base, &q, tip).unwrap();
+            let sol = solve_ik(
+                &m,
+                &chain,
+                base,
+                rest.as_slice(),
+                target,
+                &IkOptions::default(),
+                &mut rng,
+            );
+            let Ok(sol) = sol else { continue };
+            let got = m.link_pose(base, &sol.configuration, tip).unwrap();
+            assert!((got.translation - target.translation).length() < 1e-3);
+            assert!(angle(got.rotation, target.rotation) < 0.01);
+            // Limits respected, joints outside the chain untouched.
+            let checked = m.configuration(sol.configuration.clone()).unwrap();
+            assert!(checked.is_within_limits());
+            for d in 0..m.dof() {
+                if !chain.dofs.contains(&d) {
+                    assert_eq!(sol.configuration[d], rest.as_slice()[d]);
+                }
+            }
+            solved += 1;
+        }
+        assert!(solved >= 98, "{file} {chain_name}: solved {solved} of 100");
+    }
+
+    #[test]
+    fn pr2_right_arm_round_trips() {
+        round_trips("pr2.urdf", "right_arm", 1);
+    }
+
+    #[test]
+    fn pr2_left_arm_round_trips() {
+        round_trips("pr2.urdf", "left_arm", 2);
+    }
+
+    #[test]
+    fn human_right_arm_round_trips() {
+        round_trips("human.urdf", "right_arm", 3);
+    }
+
+    #[test]
+    fn pr2_unreachable_target_fails_fast() {
+        let m = model("pr2.urdf");
+        let chain = m.chain("right_arm").unwrap();
+        let q = m.default_configuration();
+        let target = Pose::from_translation(Vector::new(3.0, 0.0, 1.0));
+        let mut rng = fastrand::Rng::with_seed(4);
+        let e = solve_ik(
+            &m,
+            &chain,
+            Pose::IDENTITY,
+            q.as_slice(),
+            target,
+            &IkOptions::default(),
+            &mut rng,
+        )
+        .unwrap_err();
+        assert!(matches!(e, IkError::OutOfReach { .. }), "{e}");
+    }
+
+    #[test]
+    fn pr2_target_behind_the_shoulder_limits_fails() {
+        // Within reach distance but demanding the arm to bend past its limits: the tool frame
+        // right behind the back of the robot, pointing forward.
+        let m = model("pr2.urdf");
+        let chain = m.chain("right_arm").unwrap();
+        let q = m.default_configuration();
+        let target = Pose::from_translation(Vector::new(-0.6, 0.3, 0.75));
+        let mut rng = fastrand::Rng::with_seed(5);
+        let opts = IkOptions {
+            attempts: 10,
+            ..IkOptions::default()
+        };
+        let e = solve_ik(
+            &m,
+            &chain,
+            Pose::IDENTITY,
+            q.as_slice(),
+            target,
+            &opts,
+            &mut rng,
+        );
+        assert!(matches!(e, Err(IkError::NoSolution { .. })), "{e:?}");
+    }
+
+    #[test]
+    fn position_only_target() {
+        let m = model("pr2.urdf");
+        let chain = m.chain("right_arm").unwrap();
+        let q = m.default_configuration();
+        let target = Pose::from_translation(Vector::new(0.6, -0.3, 0.9));
+        let mut rng = fastrand::Rng::with_seed(6);
+        let opts = IkOptions {
+            orientation: false,
+            ..IkOptions::default()
+        };
+        let sol = solve_ik(
+            &m,
+            &chain,
+            Pose::IDENTITY,
+            q.as_slice(),
+            target,
+            &opts,
+            &mut rng,
+        )
+        .unwrap();
+        let got = m
+            .link_pose(Pose::IDENTITY, &sol.configuration, "r_gripper_tool_frame")
+            .unwrap();
+        assert!((got.translation - target.translation).length() < 1e-3);
+    }
+}

@@ -1,0 +1,777 @@
+//! Collision checking of an agent (robot or human) in a configuration: self-collision, the agent
+//! against the static obstacles of a scene, and an object held in a gripper or hand against both.
+//!
+//! Three pieces, built in this order and shared behind `Arc`s:
+//!
+//! * [`StaticObstacles`]: the scene's fixed geometry (name, pose, parry shape), with cached world
+//!   AABBs and, for larger sets, a parry [`Bvh`] over them. Built once per scene.
+//! * [`SelfCollisionModel`]: an [`AgentModel`]'s collision shapes flattened into one list, and
+//!   the list of shape pairs to test for self-collision. Pairs are left out, as MoveIt's setup
+//!   assistant does for its SRDF, when their links are *adjacent* (a link and its parent, one
+//!   joint apart), when they collide in the *default* configuration (all joints at 0,
+//!   clamped into the limits), or when they collide in at least [`SelfCollisionOptions::always_fraction`]
+//!   of seeded random configurations (*always*: they overlap by construction). Built once per
+//!   agent model; the left-out pairs and why are listed by [`SelfCollisionModel::allowed_pairs`].
+//! * [`CollisionChecker`]: the two above, the agent's base pose, and optionally a
+//!   [`HeldObject`]. Answers [`CollisionChecker::is_config_free`] (fast, early exit) and
+//!   [`CollisionChecker::first_collision`] / [`CollisionChecker::collisions`] (which pair).
+//!
+//! A check runs forward kinematics once, poses every shape, then tests shape AABBs against the
+//! obstacles' AABBs (broad phase) and bounding spheres for self pairs before parry's exact
+//! intersection test (narrow phase). Whether shapes exactly touching (distance 0) count as
+//! colliding is up to parry's tests and rounding; design shapes with a small gap instead.
+//!
+//! Obstacles that touch the agent by design must be kept out of the set: a floor should lie just
+//! below z = 0 (the PR2's base and a standing human's feet touch z = 0), and an object being
+//! picked up must be removed ([`StaticObstacles::without`]) and given as the held object.
+
+use std::cell::RefCell;
+use std::fmt;
+use std::sync::Arc;
+
+use parry3d::bounding_volume::Aabb;
+use parry3d::math::Pose;
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+use parry3d::query;
+use parry3d::shape::{Shape, SharedShape};
+
+use crate::agent::{AgentModel, ModelError};
+
+/// One piece of static scene geometry.
+#[derive(Clone)]
+pub struct Obstacle {
+    /// Name (for reports: the scene object's name).
+    pub name: String,
+    /// World pose of the shape.
+    pub pose: Pose,
+    /// The shape.
+    pub shape: SharedShape,
+}
+
+impl fmt::Debug for Obstacle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Obstacle")
+            .field("name", &self.name)
+            .field("pose", &self.pose)
+            .finish()
+    }
+}
+
+/// Above this many obstacles the broad phase walks a BVH; below, a flat AABB sweep is faster.
+const LINEAR_SWEEP_MAX: usize = 32;
+
+/// The static obstacles of a scene, with cached world AABBs and a BVH over them.
+#[derive(Clone)]
+pub struct StaticObstacles {
+    obstacles: Vec<Obstacle>,
+    aabbs: Vec<Aabb>,
+    bvh: Option<Bvh>,
+}
+
+impl fmt::Debug for StaticObstacles {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list()
+            .entries(self.obstacles.iter().map(|o| &o.name))
+            .finish()
+    }
+}
+
+impl StaticObstacles {
+    /// Caches the obstacles' world AABBs and builds the broad phase.
+    pub fn new(obstacles: Vec<Obstacle>) -> StaticObstacles {
+        let aabbs: Vec<Aabb> = obstacles
+            .iter()
+            .map(|o| o.shape.compute_aabb(&o.pose))
+            .collect();
+        let bvh = (obstacles.len() > LINEAR_SWEEP_MAX)
+            .then(|| Bvh::from_leaves(BvhBuildStrategy::default(), &aabbs));
+        StaticObstacles {
+            obstacles,
+            aabbs,
+            bvh,
+        }
+    }
+
+    /// No obstacles.
+    pub fn empty() -> StaticObstacles {
+        StaticObstacles::new(Vec::new())
+    }
+
+    /// A copy without the obstacles whose names are listed (for example the object being picked).
+    pub fn without(&self, names: &[&str]) -> StaticObstacles {
+        StaticObstacles::new(
+            self.obstacles
+                .iter()
+                .filter(|o| !names.contains(&o.name.as_str()))
+                .cloned()
+                .collect(),
+        )
+    }
+
+    /// Number of obstacles.
+    pub fn len(&self) -> usize {
+        self.obstacles.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.obstacles.is_empty()
+    }
+
+    /// The obstacles, in the order given.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// World AABB of obstacle `i`.
+    pub fn aabb(&self, i: usize) -> &Aabb {
+        &self.aabbs[i]
+    }
+
+    /// The first obstacle that intersects `shape` at `pose` (whose world AABB is `aabb`).
+    pub fn first_hit(&self, pose: &Pose, shape: &dyn Shape, aabb: &Aabb) -> Option<usize> {
+        let mut hit = None;
+        self.for_each_hit(pose, shape, aabb, |i| {
+            hit = Some(i);
+            true
+        });
+        hit
+    }
+
+    /// Calls `f` with every obstacle that intersects `shape` at `pose`, until `f` returns true.
+    /// Returns whether `f` stopped the walk.
+    fn for_each_hit(
+        &self,
+        pose: &Pose,
+        shape: &dyn Shape,
+        aabb: &Aabb,
+        mut f: impl FnMut(usize) -> bool,
+    ) -> bool {
+        let mut narrow = |i: usize| -> bool {
+            let o = &self.obstacles[i];
+            intersects(pose, shape, &o.pose, &*o.shape.0) && f(i)
+        };
+        match &self.bvh {
+            None => {
+                for (i, b) in self.aabbs.iter().enumerate() {
+                    if aabb_overlap(aabb, b) && narrow(i) {
+                        return true;
+                    }
+                }
+                false
+            }
+            Some(bvh) => {
+                for i in bvh.intersect_aabb(aabb) {
+                    if narrow(i as usize) {
+                        return true;
+                    }
+                }
+                false
+            }
+        }
+    }
+}
+
+#[inline]
+fn aabb_overlap(a: &Aabb, b: &Aabb) -> bool {
+    a.mins.x <= b.maxs.x
+        && a.maxs.x >= b.mins.x
+        && a.mins.y <= b.maxs.y
+        && a.maxs.y >= b.mins.y
+        && a.mins.z <= b.maxs.z
+        && a.maxs.z >= b.mins.z
+}
+
+/// Exact test; pairs parry does not support count as colliding (conservative).
+#[inline]
+fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
+    query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
+}
+
+/// How the self-collision pairs to ignore are found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SelfCollisionOptions {
+    /// Random configurations sampled to find the pairs that always collide.
+    pub samples: usize,
+    /// Seed of the sampling.
+    pub seed: u64,
+    /// A pair colliding in at least this fraction of the samples is ignored (MoveIt's default
+    /// is 0.95).
+    pub always_fraction: f32,
+}
+
+impl Default for SelfCollisionOptions {
+    fn default() -> Self {
+        SelfCollisionOptions {
+            samples: 1000,
+            seed: 0,
+            always_fraction: 0.95,
+        }
+    }
+}
+
+/// Why a pair of links is not checked for self-collision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AllowedReason {
+    /// A link and its parent link (one joint apart).
+    Adjacent,
+    /// They collide in the default configuration.
+    Default,
+    /// They collide in (almost) every sampled configuration.
+    Always,
+}
+
+/// A pair of links left out of self-collision checks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AllowedPair {
+    /// First link's name.
+    pub link_a: String,
+    /// Second link's name.
+    pub link_b: String,
+    /// Why.
+    pub reason: AllowedReason,
+}
+
+/// One collision shape of the agent, flattened out of its link.
+#[derive(Clone)]
+struct ShapeEntry {
+    link: usize,
+    local_pose: Pose,
+    shape: SharedShape,
+    radius: f32,
+}
+
+/// An agent model's collision shapes and its self-collision pair list. Build once per model.
+#[derive(Clone)]
+pub struct SelfCollisionModel {
+    model: Arc<AgentModel>,
+    shapes: Vec<ShapeEntry>,
+    /// Shape index pairs to test for self-collision.
+    pairs: Vec<(u16, u16)>,
+    allowed: Vec<AllowedPair>,
+}
+
+impl fmt::Debug for SelfCollisionModel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SelfCollisionModel")
+            .field("model", &self.model.name())
+            .field("shapes", &self.shapes.len())
+            .field("pairs", &self.pairs.len())
+            .field("allowed", &self.allowed)
+            .finish()
+    }
+}
+
+impl SelfCollisionModel {
+    /// Flattens the model's shapes and computes the pairs to check (see the module docs).
+    pub fn new(model: Arc<AgentModel>, options: &SelfCollisionOptions) -> SelfCollisionModel {
+        let mut shapes = Vec::new();
+        for (i, link) in model.links().iter().enumerate() {
+            for c in &link.collisions {
+                shapes.push(ShapeEntry {
+                    link: i,
+                    local_pose: c.local_pose,
+                    shape: c.shape.clone(),
+                    radius: c.bounding_radius,
+                });
+            }
+        }
+        let nl = model.links().len();
+        // Link-level pair status: None = check, Some(reason) = ignore.
+        let mut status: Vec<Option<AllowedReason>> = vec![None; nl * nl];
+        let key = |a: usize, b: usize| a.min(b) * nl + a.max(b);
+        for (i, link) in model.links().iter().enumerate() {
+            if link.collisions.is_empty() {
+                continue;
+            }
+            if let Some(p) = link.parent
+                && !model.links()[p].collisions.is_empty()
+            {
+                status[key(i, p)] = Some(AllowedReason::Adjacent);
+            }
+            // Shapes of one link never collide with each other.
+            status[key(i, i)] = Some(AllowedReason::Adjacent);
+        }
+        let mut candidate_links = Vec::new();
+        for a in 0..nl {
+            for b in a + 1..nl {
+                if !model.links()[a].collisions.is_empty()
+                    && !model.links()[b].collisions.is_empty()
+                    && status[key(a, b)].is_none()
+                {
+                    candidate_links.push((a, b));
+                }
+            }
+        }
+        let mut poses = Vec::new();
+        let link_pairs_colliding = |q: &[f32], poses: &mut Vec<Pose>, out: &mut Vec<bool>| {
+            model.link_poses_into(Pose::IDENTITY, q, poses);
+            out.clear();
+            for &(a, b) in &candidate_links {
+                out.push(links_collide(&model, poses, a, b));
+            }
+        };
+        let mut hits = Vec::new();
+        let default = model.default_configuration();
+        link_pairs_colliding(default.as_slice(), &mut poses, &mut hits);
+        for (k, &(a, b)) in candidate_links.iter().enumerate() {
+            if hits[k] {
+                status[key(a, b)] = Some(AllowedReason::Default);
+            }
+        }
+        let mut counts = vec![0usize; candidate_links.len()];
+        let mut rng = fastrand::Rng::with_seed(options.seed);
+        for _ in 0..options.samples {
+            let q = model.random_configuration(&mut rng);
+            link_pairs_colliding(q.as_slice(), &mut poses, &mut hits);
+            for (c, &h) in counts.iter_mut().zip(&hits) {
+                *c += h as usize;
+            }
+        }
+        if options.samples > 0 {
+            for (k, &(a, b)) in candidate_links.iter().enumerate() {
+                let fraction = counts[k] as f32 / options.samples as f32;
+                if status[key(a, b)].is_none() && fraction >= options.always_fraction {
+                    status[key(a, b)] = Some(AllowedReason::Always);
+                }
+            }
+        }
+        let mut pairs = Vec::new();
+        for i in 0..shapes.len() {
+            for j in i + 1..shapes.len() {
+                if status[key(shapes[i].link, shapes[j].link)].is_none() {
+                    pairs.push((i as u16, j as u16));
+                }
+            }
+        }
+        let mut allowed = Vec::new();
+        for a in 0..nl {
+            for b in a + 1..nl {
+                if let Some(reason) = status[key(a, b)] {
+                    allowed.push(AllowedPair {
+                        link_a: model.links()[a].name.clone(),
+                        link_b: model.links()[b].name.clone(),
+                        reason,
+                    });
+                }
+            }
+        }
+        SelfCollisionModel {
+            model,
+            shapes,
+            pairs,
+            allowed,
+        }
+    }
+
+    /// The agent model.
+    pub fn model(&self) -> &Arc<AgentModel> {
+        &self.model
+    }
+
+    /// Link pairs left out of self-collision checks, and why.
+    pub fn allowed_pairs(&self) -> &[AllowedPair] {
+        &self.allowed
+    }
+
+    /// Number of shape pairs tested for self-collision.
+    pub fn checked_pair_count(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Whether links `a` and `b` (names) are checked against each other.
+    pub fn is_checked(&self, a: &str, b: &str) -> Result<bool, ModelError> {
+        let (a, b) = (self.model.link_id(a)?, self.model.link_id(b)?);
+        Ok(self.pairs.iter().any(|&(i, j)| {
+            let (la, lb) = (self.shapes[i as usize].link, self.shapes[j as usize].link);
+            (la == a && lb == b) || (la == b && lb == a)
+        }))
+    }
+}
+
+fn links_collide(model: &AgentModel, poses: &[Pose], a: usize, b: usize) -> bool {
+    for ca in &model.links()[a].collisions {
+        let pa = poses[a] * ca.local_pose;
+        for cb in &model.links()[b].collisions {
+            let pb = poses[b] * cb.local_pose;
+            if (pa.translation - pb.translation).length() <= ca.bounding_radius + cb.bounding_radius
+                && intersects(&pa, &*ca.shape.0, &pb, &*cb.shape.0)
+            {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// An object held by the agent: a shape fixed to one of its links (a tool or hand frame).
+#[derive(Clone)]
+pub struct HeldObject {
+    /// Name (for reports).
+    pub name: String,
+    /// The object's shape.
+    pub shape: SharedShape,
+    /// The link it is attached to.
+    pub link: usize,
+    /// The object's pose in that link's frame (the grasp).
+    pub grasp: Pose,
+    /// Links the object may touch (the gripper or hand holding it): `touching[l]`.
+    touching: Vec<bool>,
+    radius: f32,
+}
+
+impl fmt::Debug for HeldObject {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("HeldObject")
+            .field("name", &self.name)
+            .field("link", &self.link)
+            .field("grasp", &self.grasp)
+            .finish()
+    }
+}
+
+impl HeldObject {
+    /// An object attached to link `link_name` (for example `r_gripper_tool_frame` or `r_hand`)
+    /// at pose `grasp` in that link's frame. It is not checked against the hand holding it: the
+    /// nearest link with geometry at or above `link_name` (the palm) and all that link's
+    /// descendants (the fingers).
+    pub fn new(
+        model: &AgentModel,
+        name: &str,
+        shape: SharedShape,
+        link_name: &str,
+        grasp: Pose,
+    ) -> Result<HeldObject, ModelError> {
+        let link = model.link_id(link_name)?;
+        let hand = model.geometric_ancestor(link).unwrap_or(link);
+        let touching = (0..model.links().len())
+            .map(|l| model.is_descendant(l, hand))
+            .collect();
+        let radius = shape.compute_local_bounding_sphere();
+        let radius = radius.center.length() + radius.radius;
+        Ok(HeldObject {
+            name: name.to_string(),
+            shape,
+            link,
+            grasp,
+            touching,
+            radius,
+        })
+    }
+
+    /// Names of the links the object is allowed to touch.
+    pub fn touching_links<'a>(&self, model: &'a AgentModel) -> Vec<&'a str> {
+        model
+            .links()
+            .iter()
+            .zip(&self.touching)
+            .filter(|(_, t)| **t)
+            .map(|(l, _)| l.name.as_str())
+            .collect()
+    }
+}
+
+/// What collides with what, by name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Contact {
+    /// Two links of the agent.
+    SelfCollision {
+        /// A link.
+        link_a: String,
+        /// Another link.
+        link_b: String,
+    },
+    /// A link and a scene obstacle.
+    Obstacle {
+        /// The agent's link.
+        link: String,
+        /// The obstacle's name.
+        obstacle: String,
+    },
+    /// The held object and a scene obstacle.
+    HeldObstacle {
+        /// The held object's name.
+        object: String,
+        /// The obstacle's name.
+        obstacle: String,
+    },
+    /// The held object and a link of the agent.
+    HeldLink {
+        /// The held object's name.
+        object: String,
+        /// The agent's link.
+        link: String,
+    },
+}
+
+impl fmt::Display for Contact {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Contact::SelfCollision { link_a, link_b } => {
+                write!(f, "self-collision: {link_a} with {link_b}")
+            }
+            Contact::Obstacle { link, obstacle } => write!(f, "link {link} hits {obstacle}"),
+            Contact::HeldObstacle { object, obstacle } => {
+                write!(f, "held {object} hits {obstacle}")
+            }
+            Contact::HeldLink { object, link } => write!(f, "held {object} hits link {link}"),
+        }
+    }
+}
+
+/// A collision found by a check, as indices.
+#[derive(Debug, Clone, Copy)]
+enum Hit {
+    SelfPair(usize, usize),
+    Obstacle(usize, usize),
+    HeldObstacle(usize),
+    HeldShape(usize),
+}
+
+/// Per-thread buffers so that checks do not allocate.
+#[derive(Default)]
+struct Scratch {
+    links: Vec<Pose>,
+    poses: Vec<Pose>,
+    aabbs: Vec<Aabb>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// Collision checks of one agent at a fixed base pose among static obstacles, optionally
+/// holding an object. Cheap to clone (shares the models); `Send + Sync`.
+#[derive(Clone, Debug)]
+pub struct CollisionChecker {
+    agent: Arc<SelfCollisionModel>,
+    obstacles: Arc<StaticObstacles>,
+    base: Pose,
+    held: Option<HeldObject>,
+    self_collision: bool,
+}
+
+impl CollisionChecker {
+    /// A checker for `agent` with base pose `base` among `obstacles`.
+    pub fn new(
+        agent: Arc<SelfCollisionModel>,
+        obstacles: Arc<StaticObstacles>,
+        base: Pose,
+    ) -> CollisionChecker {
+        CollisionChecker {
+            agent,
+            obstacles,
+            base,
+            held: None,
+            self_collision: true,
+        }
+    }
+
+    /// The same checker with an object held (replacing any other).
+    pub fn with_held_object(mut self, held: HeldObject) -> CollisionChecker {
+        self.held = Some(held);
+        self
+    }
+
+    /// Sets or clears the held object.
+    pub fn set_held_object(&mut self, held: Option<HeldObject>) {
+        self.held = held;
+    }
+
+    /// Turns self-collision checks on or off (on by default).
+    pub fn set_self_collision(&mut self, on: bool) {
+        self.self_collision = on;
+    }
+
+    /// Moves the agent's base.
+    pub fn set_base(&mut self, base: Pose) {
+        self.base = base;
+    }
+
+    /// The agent's base pose.
+    pub fn base(&self) -> Pose {
+        self.base
+    }
+
+    /// The agent model.
+    pub fn model(&self) -> &Arc<AgentModel> {
+        &self.agent.model
+    }
+
+    /// The self-collision model.
+    pub fn self_collision_model(&self) -> &Arc<SelfCollisionModel> {
+        &self.agent
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &Arc<StaticObstacles> {
+        &self.obstacles
+    }
+
+    /// The held object, if any.
+    pub fn held_object(&self) -> Option<&HeldObject> {
+        self.held.as_ref()
+    }
+
+    /// Whether configuration `q` is free of collisions (stops at the first one found).
+    ///
+    /// # Panics
+    /// If `q.len()` is not the model's number of degrees of freedom.
+    pub fn is_config_free(&self, q: &[f32]) -> bool {
+        let mut found = false;
+        self.check(q, |_| {
+            found = true;
+            true
+        });
+        !found
+    }
+
+    /// The first collision found in configuration `q`, or `None` if it is free.
+    pub fn first_collision(&self, q: &[f32]) -> Option<Contact> {
+        let mut hit = None;
+        self.check(q, |h| {
+            hit = Some(h);
+            true
+        });
+        hit.map(|h| self.contact(h))
+    }
+
+    /// Every collision in configuration `q`.
+    pub fn collisions(&self, q: &[f32]) -> Vec<Contact> {
+        let mut hits = Vec::new();
+        self.check(q, |h| {
+            hits.push(h);
+            false
+        });
+        hits.into_iter().map(|h| self.contact(h)).collect()
+    }
+
+    fn contact(&self, h: Hit) -> Contact {
+        let links = self.agent.model.links();
+        let shape_link = |s: usize| links[self.agent.shapes[s].link].name.clone();
+        let held = || {
+            self.held
+                .as_ref()
+                .map(|o| o.name.clone())
+                .unwrap_or_default()
+        };
+        match h {
+            Hit::SelfPair(a, b) => Contact::SelfCollision {
+                link_a: shape_link(a),
+                link_b: shape_link(b),
+            },
+            Hit::Obstacle(s, o) => Contact::Obstacle {
+                link: shape_link(s),
+                obstacle: self.obstacles.obstacles[o].name.clone(),
+            },
+            Hit::HeldObstacle(o) => Contact::HeldObstacle {
+                object: held(),
+                obstacle: self.obstacles.obstacles[o].name.clone(),
+            },
+            Hit::HeldShape(s) => Contact::HeldLink {
+                object: held(),
+                link: shape_link(s),
+            },
+        }
+    }
+
+    /// Runs the checks, calling `report` for each collision until it returns true.
+    fn check(&self, q: &[f32], mut report: impl FnMut(Hit) -> bool) {
+        SCRATCH.with(|scratch| {
+            let mut guard = scratch.borrow_mut();
+            let Scratch {
+                links,
+                poses,
+                aabbs,
+            } = &mut *guard;
+            let model = &self.agent.model;
+            model.link_poses_into(self.base, q, links);
+            let shapes = &self.agent.shapes;
+            poses.clear();
+            aabbs.clear();
+            for s in shapes {
+                let p = links[s.link] * s.local_pose;
+                poses.push(p);
+                aabbs.push(s.shape.compute_aabb(&p));
+            }
+            // Agent against the scene.
+            if !self.obstacles.is_empty() {
+                for (i, s) in shapes.iter().enumerate() {
+                    let stop =
+                        self.obstacles
+                            .for_each_hit(&poses[i], &*s.shape.0, &aabbs[i], |o| {
+                                report(Hit::Obstacle(i, o))
+                            });
+                    if stop {
+                        return;
+                    }
+                }
+            }
+            // Self-collision.
+            if self.self_collision {
+                for &(a, b) in &self.agent.pairs {
+                    let (a, b) = (a as usize, b as usize);
+                    let r = shapes[a].radius + shapes[b].radius;
+                    if (poses[a].translation - poses[b].translation).length_squared() > r * r {
+                        continue;
+                    }
+                    if !aabb_overlap(&aabbs[a], &aabbs[b]) {
+                        continue;
+                    }
+                    if intersects(
+                        &poses[a],
+                        &*shapes[a].shape.0,
+                        &poses[b],
+                        &*shapes[b].shape.0,
+                    ) && report(Hit::SelfPair(a, b))
+                    {
+                        return;
+                    }
+                }
+            }
+            // The held object against the scene and the agent.
+            if let Some(held) = &self.held {
+                let p = links[held.link] * held.grasp;
+                let aabb = held.shape.compute_aabb(&p);
+                let stop = self
+                    .obstacles
+                    .for_each_hit(&p, &*held.shape.0, &aabb, |o| report(Hit::HeldObstacle(o)));
+                if stop {
+                    return;
+                }
+                let centre = p.translation;
+                for (i, s) in shapes.iter().enumerate() {
+                    if held.touching[s.link] {
+                        continue;
+                    }
+                    let r = s.radius + held.radius;
+                    if (poses[i].translation - centre).length_squared() > r * r
+                        || !aabb_overlap(&aabbs[i], &aabb)
+                    {
+                        continue;
+                    }
+                    if intersects(&poses[i], &*s.shape.0, &p, &*held.shape.0)
+                        && report(Hit::HeldShape(i))
+                    {
+                        return;
+                    }
+                }
+            }
+        });
+    }
+}
+
+/// World poses and shapes of an agent's collision geometry in configuration `q`, as obstacles
+/// named `"{prefix}/{link}"`: for putting another agent (the human, seen by the robot) into a
+/// [`StaticObstacles`] set.
+pub fn agent_obstacles(model: &AgentModel, base: Pose, q: &[f32], prefix: &str) -> Vec<Obstacle> {
+    model
+        .posed_shapes(base, q)
+        .into_iter()
+        .map(|(link, c, pose)| Obstacle {
+            name: format!("{prefix}/{}", model.links()[link].name),
+            pose,
+            shape: c.shape.clone(),
+        })
+        .collect()
+}

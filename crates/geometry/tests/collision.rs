@@ -1,0 +1,285 @@
+//! Collision truths on constructed cases.
+
+use std::sync::Arc;
+
+use geometry::agent::{AgentModel, human_postures};
+use geometry::collision::{
+    CollisionChecker, Contact, HeldObject, Obstacle, SelfCollisionModel, SelfCollisionOptions,
+    StaticObstacles,
+};
+use parry3d::math::{Pose, Vector};
+use parry3d::shape::SharedShape;
+
+fn model(name: &str) -> Arc<AgentModel> {
+    let path = format!("{}/../../models/{name}", env!("CARGO_MANIFEST_DIR"));
+    Arc::new(AgentModel::from_urdf_file(&path).unwrap_or_else(|e| panic!("{e}")))
+}
+
+fn self_model(name: &str) -> Arc<SelfCollisionModel> {
+    Arc::new(SelfCollisionModel::new(
+        model(name),
+        &SelfCollisionOptions::default(),
+    ))
+}
+
+fn boxed(name: &str, centre: Vector, half: Vector) -> Obstacle {
+    Obstacle {
+        name: name.to_string(),
+        pose: Pose::from_translation(centre),
+        shape: SharedShape::cuboid(half.x, half.y, half.z),
+    }
+}
+
+fn pr2_checker(obstacles: Vec<Obstacle>) -> CollisionChecker {
+    CollisionChecker::new(
+        self_model("pr2.urdf"),
+        Arc::new(StaticObstacles::new(obstacles)),
+        Pose::IDENTITY,
+    )
+}
+
+/// The right tool frame of the PR2 at the zero configuration, base at the origin.
+const R_TOOL: Vector = Vector::new(0.951, -0.188, 0.739675);
+
+#[test]
+fn zero_configurations_and_postures_are_free() {
+    let c = pr2_checker(vec![]);
+    let q = c.model().default_configuration();
+    assert_eq!(c.first_collision(q.as_slice()), None);
+    let h = self_model("human.urdf");
+    let c = CollisionChecker::new(
+        h.clone(),
+        Arc::new(StaticObstacles::empty()),
+        Pose::IDENTITY,
+    );
+    for posture in [human_postures::SITTING, human_postures::STANDING] {
+        let mut q = h.model().default_configuration();
+        q.set_many(posture).unwrap();
+        assert_eq!(c.collisions(q.as_slice()), vec![]);
+    }
+}
+
+#[test]
+fn gripper_inside_a_box_collides_and_far_box_is_free() {
+    let q = self_model("pr2.urdf").model().default_configuration();
+    let c = pr2_checker(vec![boxed("crate", R_TOOL, Vector::splat(0.05))]);
+    assert!(!c.is_config_free(q.as_slice()));
+    match c.first_collision(q.as_slice()) {
+        Some(Contact::Obstacle { link, obstacle }) => {
+            assert_eq!(obstacle, "crate");
+            assert!(link.starts_with("r_gripper"), "{link}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let c = pr2_checker(vec![boxed(
+        "crate",
+        Vector::new(3.0, 3.0, 0.5),
+        Vector::splat(0.3),
+    )]);
+    assert!(c.is_config_free(q.as_slice()));
+}
+
+#[test]
+fn table_under_the_arm() {
+    let q = self_model("pr2.urdf").model().default_configuration();
+    // Upper arm capsule: radius 0.07 around z = 0.739675, so its bottom is at 0.6697.
+    let table = |top: f32| {
+        boxed(
+            "table",
+            Vector::new(0.9, 0.0, top / 2.0),
+            Vector::new(0.4, 0.6, top / 2.0),
+        )
+    };
+    assert!(pr2_checker(vec![table(0.65)]).is_config_free(q.as_slice()));
+    assert!(!pr2_checker(vec![table(0.70)]).is_config_free(q.as_slice()));
+    // Moving the base back clears the high table.
+    let mut c = pr2_checker(vec![table(0.70)]);
+    c.set_base(Pose::from_translation(Vector::new(-1.5, 0.0, 0.0)));
+    assert!(c.is_config_free(q.as_slice()));
+}
+
+#[test]
+fn folded_arm_hits_the_torso() {
+    let c = pr2_checker(vec![]);
+    let mut q = c.model().default_configuration();
+    q.set_many(&[
+        ("r_shoulder_pan_joint", 0.7),
+        ("r_upper_arm_roll_joint", -std::f32::consts::FRAC_PI_2),
+        ("r_elbow_flex_joint", -2.3),
+    ])
+    .unwrap();
+    let all = c.collisions(q.as_slice());
+    assert!(
+        all.iter()
+            .any(|k| matches!(k, Contact::SelfCollision { link_a, link_b }
+            if link_a == "torso_lift_link" && link_b.starts_with("r_gripper"))),
+        "{all:?}"
+    );
+    assert!(!c.is_config_free(q.as_slice()));
+    // Without self-collision checks the same configuration is free (no obstacles).
+    let mut c2 = c.clone();
+    c2.set_self_collision(false);
+    assert!(c2.is_config_free(q.as_slice()));
+    // Unfolded, it is free.
+    q.set("r_elbow_flex_joint", 0.0).unwrap();
+    q.set("r_shoulder_pan_joint", 0.0).unwrap();
+    assert!(c.is_config_free(q.as_slice()));
+}
+
+#[test]
+fn human_arm_through_the_body_collides() {
+    let h = self_model("human.urdf");
+    let c = CollisionChecker::new(
+        h.clone(),
+        Arc::new(StaticObstacles::empty()),
+        Pose::IDENTITY,
+    );
+    let mut q = h.model().default_configuration();
+    q.set("r_shoulder_roll_joint", 0.3).unwrap();
+    let all = c.collisions(q.as_slice());
+    assert!(
+        all.contains(&Contact::SelfCollision {
+            link_a: "torso_link".into(),
+            link_b: "r_upper_arm_link".into()
+        }),
+        "{all:?}"
+    );
+}
+
+#[test]
+fn held_book_hits_the_table() {
+    let m = self_model("pr2.urdf");
+    let q = m.model().default_configuration();
+    // Table top at 0.64 under the gripper only (the arm itself clears it).
+    let table = boxed(
+        "table",
+        Vector::new(1.1, -0.188, 0.32),
+        Vector::new(0.3, 0.4, 0.32),
+    );
+    let c = CollisionChecker::new(
+        m.clone(),
+        Arc::new(StaticObstacles::new(vec![table])),
+        Pose::IDENTITY,
+    );
+    assert!(c.is_config_free(q.as_slice()));
+    let book = SharedShape::cuboid(0.1, 0.075, 0.05);
+    // Hanging 6 cm below the tool frame, the book's bottom is at 0.63: into the table.
+    let low = HeldObject::new(
+        m.model(),
+        "grey-book",
+        book.clone(),
+        "r_gripper_tool_frame",
+        Pose::from_translation(Vector::new(0.0, 0.0, -0.06)),
+    )
+    .unwrap();
+    let c_low = c.clone().with_held_object(low);
+    assert_eq!(
+        c_low.first_collision(q.as_slice()),
+        Some(Contact::HeldObstacle {
+            object: "grey-book".into(),
+            obstacle: "table".into()
+        })
+    );
+    // Held between the fingers, the book clears the table, and touching the gripper is allowed.
+    let held = HeldObject::new(
+        m.model(),
+        "grey-book",
+        book.clone(),
+        "r_gripper_tool_frame",
+        Pose::IDENTITY,
+    )
+    .unwrap();
+    let touching = held.touching_links(m.model());
+    assert!(
+        touching.contains(&"r_gripper_palm_link") && touching.contains(&"r_gripper_l_finger_link")
+    );
+    assert!(!touching.contains(&"r_forearm_link"));
+    let c_ok = c.clone().with_held_object(held);
+    assert!(
+        c_ok.is_config_free(q.as_slice()),
+        "{:?}",
+        c_ok.collisions(q.as_slice())
+    );
+    // Held 45 cm back along the arm, the book is around the elbow: it hits the robot.
+    let back = HeldObject::new(
+        m.model(),
+        "grey-book",
+        book,
+        "r_gripper_tool_frame",
+        Pose::from_translation(Vector::new(-0.45, 0.0, 0.0)),
+    )
+    .unwrap();
+    let hits = c.clone().with_held_object(back).collisions(q.as_slice());
+    assert!(
+        hits.iter().any(|k| matches!(k, Contact::HeldLink { link, .. } if link.starts_with("r_elbow") || link.starts_with("r_forearm") || link.starts_with("r_upper_arm"))),
+        "{hits:?}"
+    );
+}
+
+#[test]
+fn adjacent_pairs_skipped_real_pairs_checked() {
+    let s = self_model("pr2.urdf");
+    assert!(
+        !s.is_checked("r_upper_arm_link", "r_elbow_flex_link")
+            .unwrap()
+    );
+    for (a, b) in [
+        ("torso_lift_link", "r_upper_arm_link"),
+        ("torso_lift_link", "r_gripper_palm_link"),
+        ("base_link", "r_forearm_link"),
+        ("r_gripper_palm_link", "l_gripper_palm_link"),
+        ("r_upper_arm_link", "r_forearm_link"),
+        ("head_tilt_link", "l_gripper_l_finger_link"),
+    ] {
+        assert!(s.is_checked(a, b).unwrap(), "{a} {b}");
+    }
+    assert!(s.is_checked("no_link", "base_link").is_err());
+    let h = self_model("human.urdf");
+    assert!(h.is_checked("torso_link", "r_upper_arm_link").unwrap());
+    assert!(h.is_checked("r_hand_link", "l_hand_link").unwrap());
+    assert!(h.is_checked("head_link", "r_hand_link").unwrap());
+}
+
+/// Many obstacles (the BVH broad phase) give the same answers as testing every obstacle.
+#[test]
+fn bvh_broad_phase_agrees_with_brute_force() {
+    let m = self_model("pr2.urdf");
+    let mut rng = fastrand::Rng::with_seed(11);
+    let mut obstacles = Vec::new();
+    for i in 0..60 {
+        let c = Vector::new(
+            rng.f32() * 2.4 - 1.0,
+            rng.f32() * 2.4 - 1.2,
+            rng.f32() * 1.6,
+        );
+        let h = Vector::new(
+            0.02 + rng.f32() * 0.1,
+            0.02 + rng.f32() * 0.1,
+            0.02 + rng.f32() * 0.1,
+        );
+        obstacles.push(boxed(&format!("o{i}"), c, h));
+    }
+    let set = Arc::new(StaticObstacles::new(obstacles.clone()));
+    let mut c = CollisionChecker::new(m.clone(), set, Pose::IDENTITY);
+    c.set_self_collision(false);
+    let (mut free, mut hit) = (0, 0);
+    for _ in 0..200 {
+        let q = m.model().random_configuration(&mut rng);
+        let brute = m
+            .model()
+            .posed_shapes(Pose::IDENTITY, q.as_slice())
+            .iter()
+            .any(|(_, s, p)| {
+                obstacles.iter().any(|o| {
+                    parry3d::query::intersection_test(p, &*s.shape.0, &o.pose, &*o.shape.0)
+                        .unwrap()
+                        .intersecting
+                })
+            });
+        assert_eq!(c.is_config_free(q.as_slice()), !brute);
+        if brute { hit += 1 } else { free += 1 }
+    }
+    assert!(free > 10 && hit > 10, "free {free} hit {hit}");
+    let fewer = c.obstacles().without(&["o1", "o2"]);
+    assert_eq!(fewer.len(), 58);
+}
