@@ -19,6 +19,13 @@ const EYE_TO_CAMERA = new THREE.Matrix4().makeBasis(
   new THREE.Vector3(-1, 0, 0),
 );
 
+interface Snapshot {
+  step: number;
+  time: number;
+  objects: Record<string, Pose>;
+  links: Record<string, Record<string, Pose>>;
+}
+
 interface PixelStats {
   width: number;
   height: number;
@@ -44,6 +51,8 @@ export interface TestHook {
   objectPose(name: string): Pose | null;
   linkPose(agent: string, link: string): Pose | null;
   cameraPose(): Pose;
+  /** Everything at once: current step, time, and the rendered pose of every object and link. */
+  snapshot(): Snapshot;
   stepTimes(): { start: number; end: number }[];
   play(speed?: number): void;
   pause(): void;
@@ -270,12 +279,12 @@ class App {
     if (this.t >= this.timeline.duration) this.t = 0;
     this.playing = true;
     this.last = performance.now();
-    this.dirty = true;
+    this.applyTime();
   }
 
   pause(): void {
     this.playing = false;
-    this.dirty = true;
+    this.applyTime();
   }
 
   seekTime(t: number): void {
@@ -330,6 +339,7 @@ class App {
     }
     view.apply(state, highlight);
     this.state = state;
+    this.ui.update(state, this.t, tl.duration, this.playing);
     this.dirty = true;
   }
 
@@ -366,9 +376,6 @@ class App {
 
   render(): void {
     this.placeEyeCamera();
-    if (this.state !== null && this.timeline !== null) {
-      this.ui.update(this.state, this.t, this.timeline.duration, this.playing);
-    }
     this.renderer.render(this.scene, this.camera);
     this.labels.render(this.scene, this.camera);
   }
@@ -448,6 +455,17 @@ const hook: TestHook = {
   cameraPose: () => {
     app.render();
     return app.cameraPose();
+  },
+  snapshot: () => {
+    const v = app.sceneView;
+    const objects: Record<string, Pose> = {};
+    const links: Record<string, Record<string, Pose>> = {};
+    for (const name of v?.objects.keys() ?? []) objects[name] = v!.objectPose(name)!;
+    for (const [agent, byLink] of v?.links ?? []) {
+      links[agent] = {};
+      for (const l of byLink.keys()) links[agent][l] = v!.linkPose(agent, l)!;
+    }
+    return { step: app.state?.step ?? -1, time: app.t, objects, links };
   },
   stepTimes: () => app.timeline?.spans.map((s) => ({ start: s.start, end: s.end })) ?? [],
   play: (speed) => app.play(speed),

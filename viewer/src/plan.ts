@@ -130,10 +130,12 @@ export function parsePlanText(text: string, source: string): Plan {
 
 function jsonErrorWhere(text: string, e: unknown): string {
   const msg = e instanceof Error ? e.message : String(e);
+  if (text.trim() === '') return 'the file is empty';
   if (/line \d+ column \d+/.test(msg)) return msg;
   const m = /position (\d+)/.exec(msg);
-  if (!m) return text.trim() === '' ? 'the file is empty' : msg;
-  const pos = Number(m[1]);
+  // Without a position (a truncated file), the error is at the end.
+  const pos = m ? Number(m[1]) : /end of JSON/i.test(msg) ? text.length : null;
+  if (pos === null) return msg;
   const before = text.slice(0, pos);
   const line = before.split('\n').length;
   const column = pos - before.lastIndexOf('\n');
