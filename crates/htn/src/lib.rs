@@ -6,6 +6,11 @@
 //! reach the world through a trait that the `hybrid` crate implements.
 
 pub mod model;
+pub mod oracle;
 pub mod parser;
+pub mod plan;
+pub mod planner;
+pub mod state;
+pub mod validate;
 
 pub use parser::{ParseError, load_domain, load_problem, parse_domain, parse_problem};

@@ -1,9 +1,120 @@
-//! `htngtp plan`.
+//! `htngtp plan`: plan an HDDL problem with the HTN planner, validate the plan, print it.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use htn::planner::{Limits, Outcome, PlannerOptions, Strategy};
+
+use crate::exit;
 
 /// Arguments of `htngtp plan`.
 #[derive(clap::Args)]
-pub struct Args {}
+#[command(
+    after_help = "Exit codes: 0 plan found, 1 proven unsolvable (the whole search space was \
+                        explored), 2 a limit stopped the search (which one is said on stderr and \
+                        in the JSON), 3 bad input.\n\nThe plan is checked by the independent \
+                        validator before it is printed; it is printed in the competition format \
+                        (or as JSON with --json, with search statistics)."
+)]
+pub struct Args {
+    /// The HDDL domain file.
+    pub domain: PathBuf,
+    /// The HDDL problem file.
+    pub problem: PathBuf,
+    /// Stop after this many seconds.
+    #[arg(long, value_name = "S")]
+    pub time_limit: Option<f64>,
+    /// Stop after expanding this many search nodes.
+    #[arg(long, value_name = "N")]
+    pub node_limit: Option<u64>,
+    /// Stop when the process's resident memory exceeds this many MiB.
+    #[arg(long, value_name = "MB")]
+    pub memory_limit: Option<u64>,
+    /// Seed of the search (it is deterministic for a given seed).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print the result as JSON: status, plan, plan text, statistics, limit.
+    #[arg(long)]
+    pub json: bool,
+    /// Backtracking over geometric solutions: symbolic, chronological or geometric-first.
+    #[arg(long, value_enum, default_value_t = StrategyArg::Chronological)]
+    pub strategy: StrategyArg,
+    /// With --strategy geometric-first: how many other geometric solutions to try per failure.
+    #[arg(long, default_value_t = 3)]
+    pub geo_k: usize,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<u8> {
-    anyhow::bail!("`htngtp plan` is not implemented yet")
+/// The `--strategy` values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum StrategyArg {
+    /// Each geometric task gives at most one solution; only HTN choices are revisited.
+    Symbolic,
+    /// Every choice point, latest first.
+    Chronological,
+    /// On a geometric failure, try other solutions of earlier geometric tasks first.
+    GeometricFirst,
+}
+
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let domain = htn::load_domain(&args.domain)?;
+    let problem = htn::load_problem(&args.problem, &domain)?;
+    let options = PlannerOptions {
+        limits: Limits {
+            time: args.time_limit.map(Duration::from_secs_f64),
+            nodes: args.node_limit,
+            memory_mb: args.memory_limit,
+        },
+        seed: args.seed,
+        strategy: match args.strategy {
+            StrategyArg::Symbolic => Strategy::Symbolic,
+            StrategyArg::Chronological => Strategy::Chronological,
+            StrategyArg::GeometricFirst => Strategy::GeometricFirst { k: args.geo_k },
+        },
+        ..PlannerOptions::default()
+    };
+    let result = htn::planner::plan(&domain, &problem, &options, None)?;
+    let mut plan_text = None;
+    if let Outcome::Found { plan } = &result.outcome {
+        htn::validate::validate(&domain, &problem, plan, &[]).context(
+            "BUG: the planner returned a plan that the validator rejects; please report it",
+        )?;
+        plan_text = Some(plan.to_competition_format());
+    }
+    let peak_kb = htn::planner::peak_rss_kb().max(result.stats.peak_memory_kb);
+    let code = match &result.outcome {
+        Outcome::Found { .. } => exit::OK,
+        Outcome::Unsolvable => exit::UNSOLVABLE,
+        Outcome::LimitReached { .. } => exit::LIMIT,
+    };
+    if args.json {
+        let mut v = serde_json::to_value(&result)?;
+        v["plan_text"] = serde_json::json!(plan_text);
+        v["peak_memory_kb"] = serde_json::json!(peak_kb);
+        v["validated"] = serde_json::json!(plan_text.is_some());
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        if let Some(t) = &plan_text {
+            print!("{t}");
+        }
+        let s = &result.stats;
+        let what = match &result.outcome {
+            Outcome::Found { plan } => format!(
+                "plan found and validated: {} actions, {} decompositions",
+                plan.actions.len(),
+                plan.decompositions.len()
+            ),
+            Outcome::Unsolvable => "no plan exists (the whole search space was explored)".into(),
+            Outcome::LimitReached { limit } => format!("stopped: {limit} reached"),
+        };
+        eprintln!(
+            "{what}\n{} nodes, {} HTN backtracks, {} geometric backtracks, {:.3} s, peak memory {:.1} MiB",
+            s.nodes,
+            s.htn_backtracks,
+            s.geo_backtracks,
+            s.time_s,
+            peak_kb as f64 / 1024.0
+        );
+    }
+    Ok(code)
 }

@@ -1,0 +1,392 @@
+//! Evaluating compiled conditions on the state, enumerating the bindings that satisfy a
+//! conjunction, and computing an action's effects.
+//!
+//! Bindings live in a slot array (`u32::MAX` = unbound). The binder is a small backtracking
+//! join: it first tests every literal whose slots are all bound (fail fast), then extends the
+//! binding through the positive atom with the fewest candidate facts, then through equalities,
+//! and only as a last resort enumerates the objects of a slot's type.
+
+use crate::model::{ArithOp, CompareOp, NumericEffectOp};
+use crate::state::State;
+
+use super::compile::{CEffect, CFormula, CLit, CNum, CTerm, Compiled};
+
+/// An unbound slot.
+pub(crate) const UNBOUND: u32 = u32::MAX;
+
+/// Read-only evaluation context.
+pub(crate) struct Eval<'a> {
+    pub c: &'a Compiled,
+    pub s: &'a State,
+    pub types: &'a [u32],
+}
+
+#[inline]
+fn val(t: &CTerm, b: &[u32]) -> u32 {
+    match *t {
+        CTerm::Var(v) => b[v as usize],
+        CTerm::Obj(o) => o,
+    }
+}
+
+/// Builds `[head, args..]` into `buf` and calls `f` with it.
+#[inline]
+fn with_key<R>(head: u32, args: &[CTerm], b: &[u32], f: impl FnOnce(&[u32]) -> R) -> R {
+    let mut arr = [0u32; 16];
+    if args.len() < 16 {
+        arr[0] = head;
+        for (i, t) in args.iter().enumerate() {
+            arr[i + 1] = val(t, b);
+        }
+        f(&arr[..=args.len()])
+    } else {
+        let mut v = Vec::with_capacity(args.len() + 1);
+        v.push(head);
+        v.extend(args.iter().map(|t| val(t, b)));
+        f(&v)
+    }
+}
+
+impl Eval<'_> {
+    /// The value of a numeric expression; NaN when a fluent is undefined.
+    pub fn num(&self, e: &CNum, b: &[u32]) -> f64 {
+        match e {
+            CNum::Number(x) => *x,
+            CNum::Fluent(f, args) => with_key(*f, args, b, |k| self.s.value(k)),
+            CNum::Bin(op, x, y) => {
+                let (x, y) = (self.num(x, b), self.num(y, b));
+                match op {
+                    ArithOp::Add => x + y,
+                    ArithOp::Sub => x - y,
+                    ArithOp::Mul => x * y,
+                    ArithOp::Div => {
+                        if y == 0.0 {
+                            f64::NAN
+                        } else {
+                            x / y
+                        }
+                    }
+                }
+            }
+            CNum::Neg(x) => -self.num(x, b),
+        }
+    }
+
+    /// Whether a condition whose free slots are all bound holds.
+    pub fn holds(&self, f: &CFormula, b: &mut [u32]) -> bool {
+        match f {
+            CFormula::True => true,
+            CFormula::Atom(p, args) => with_key(*p, args, b, |k| self.s.holds(k)),
+            CFormula::Eq(x, y) => val(x, b) == val(y, b),
+            CFormula::Not(x) => !self.holds(x, b),
+            CFormula::And(xs) => xs.iter().all(|x| self.holds(x, b)),
+            CFormula::Or(xs) => xs.iter().any(|x| self.holds(x, b)),
+            CFormula::Imply(x, y) => !self.holds(x, b) || self.holds(y, b),
+            CFormula::Exists(vs, body) => {
+                let need: Vec<u16> = vs.iter().map(|(s, _)| *s).collect();
+                self.solve(body, b, &need, &mut |_| true)
+            }
+            CFormula::Forall(vs, body) => self.forall(vs, body, b),
+            CFormula::Compare(op, x, y) => {
+                let (x, y) = (self.num(x, b), self.num(y, b));
+                match op {
+                    CompareOp::Lt => x < y,
+                    CompareOp::Le => x <= y,
+                    CompareOp::Eq => x == y,
+                    CompareOp::Ge => x >= y,
+                    CompareOp::Gt => x > y,
+                }
+            }
+        }
+    }
+
+    fn forall(&self, vs: &[(u16, u32)], body: &CFormula, b: &mut [u32]) -> bool {
+        let Some(&(slot, ty)) = vs.first() else {
+            return self.holds(body, b);
+        };
+        for &o in &self.c.type_objects[ty as usize] {
+            b[slot as usize] = o;
+            if !self.forall(&vs[1..], body, b) {
+                b[slot as usize] = UNBOUND;
+                return false;
+            }
+        }
+        b[slot as usize] = UNBOUND;
+        true
+    }
+
+    /// Whether every literal holds (all slots bound).
+    pub fn all_hold(&self, lits: &[CLit], b: &mut [u32]) -> bool {
+        lits.iter().all(|l| self.holds(&l.f, b))
+    }
+
+    /// Enumerates the bindings of the unbound slots of `lits` and of `need` that make every
+    /// literal true, calling `cb` with each; `cb` returns `true` to stop. Returns whether it
+    /// stopped. The slot array is left as it was given.
+    pub fn solve(
+        &self,
+        lits: &[CLit],
+        b: &mut [u32],
+        need: &[u16],
+        cb: &mut dyn FnMut(&[u32]) -> bool,
+    ) -> bool {
+        let mut done = vec![false; lits.len()];
+        self.solve_rec(lits, b, need, &mut done, cb)
+    }
+
+    fn solve_rec(
+        &self,
+        lits: &[CLit],
+        b: &mut [u32],
+        need: &[u16],
+        done: &mut [bool],
+        cb: &mut dyn FnMut(&[u32]) -> bool,
+    ) -> bool {
+        // Test every literal that is fully bound.
+        let mut tested: Vec<usize> = Vec::new();
+        for (i, l) in lits.iter().enumerate() {
+            if !done[i] && l.vars.iter().all(|&v| b[v as usize] != UNBOUND) {
+                if !self.holds(&l.f, b) {
+                    for &j in &tested {
+                        done[j] = false;
+                    }
+                    return false;
+                }
+                done[i] = true;
+                tested.push(i);
+            }
+        }
+        let stop = self.extend(lits, b, need, done, cb);
+        for &j in &tested {
+            done[j] = false;
+        }
+        stop
+    }
+
+    fn extend(
+        &self,
+        lits: &[CLit],
+        b: &mut [u32],
+        need: &[u16],
+        done: &mut [bool],
+        cb: &mut dyn FnMut(&[u32]) -> bool,
+    ) -> bool {
+        // The positive atom with the fewest candidates.
+        let mut best: Option<(usize, usize)> = None;
+        for (i, l) in lits.iter().enumerate() {
+            if done[i] {
+                continue;
+            }
+            if let CFormula::Atom(p, _) = &l.f {
+                let n = self.s.facts_of(*p).len();
+                if best.is_none_or(|(_, m)| n < m) {
+                    best = Some((i, n));
+                }
+            }
+        }
+        if let Some((i, _)) = best {
+            let CFormula::Atom(p, args) = &lits[i].f else {
+                unreachable!()
+            };
+            done[i] = true;
+            let mut stop = false;
+            let mut bound: [u16; 16] = [0; 16];
+            for &fid in self.s.facts_of(*p) {
+                let fa = self.s.fact_args(fid);
+                let mut nb = 0;
+                let mut ok = true;
+                for (k, t) in args.iter().enumerate() {
+                    match *t {
+                        CTerm::Obj(o) => {
+                            if fa[k] != o {
+                                ok = false;
+                                break;
+                            }
+                        }
+                        CTerm::Var(v) => {
+                            let cur = b[v as usize];
+                            if cur == UNBOUND {
+                                if !self.c.is_of(fa[k], self.types[v as usize]) || nb == 16 {
+                                    ok = false;
+                                    break;
+                                }
+                                b[v as usize] = fa[k];
+                                bound[nb] = v;
+                                nb += 1;
+                            } else if cur != fa[k] {
+                                ok = false;
+                                break;
+                            }
+                        }
+                    }
+                }
+                if ok && self.solve_rec(lits, b, need, done, cb) {
+                    stop = true;
+                }
+                for &v in &bound[..nb] {
+                    b[v as usize] = UNBOUND;
+                }
+                if stop {
+                    break;
+                }
+            }
+            done[i] = false;
+            return stop;
+        }
+        // An equality with one side bound binds the other.
+        for (i, l) in lits.iter().enumerate() {
+            if done[i] {
+                continue;
+            }
+            if let CFormula::Eq(x, y) = &l.f {
+                let (vx, vy) = (val(x, b), val(y, b));
+                let (slot, o) = match (x, y) {
+                    (CTerm::Var(v), _) if vx == UNBOUND && vy != UNBOUND => (*v, vy),
+                    (_, CTerm::Var(v)) if vy == UNBOUND && vx != UNBOUND => (*v, vx),
+                    _ => continue,
+                };
+                if !self.c.is_of(o, self.types[slot as usize]) {
+                    return false;
+                }
+                b[slot as usize] = o;
+                let stop = self.solve_rec(lits, b, need, done, cb);
+                b[slot as usize] = UNBOUND;
+                return stop;
+            }
+        }
+        // Otherwise enumerate the type of some unbound slot.
+        let slot = lits
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !done[*i])
+            .flat_map(|(_, l)| l.vars.iter())
+            .chain(need.iter())
+            .copied()
+            .find(|&v| b[v as usize] == UNBOUND);
+        if let Some(v) = slot {
+            let mut stop = false;
+            for &o in &self.c.type_objects[self.types[v as usize] as usize] {
+                b[v as usize] = o;
+                if self.solve_rec(lits, b, need, done, cb) {
+                    stop = true;
+                    break;
+                }
+            }
+            b[v as usize] = UNBOUND;
+            return stop;
+        }
+        cb(b)
+    }
+
+    /// Collects the effects of an action (evaluated in the current state) into `out`.
+    /// Returns `false` when an effect reads an undefined fluent.
+    pub fn effects(&self, effs: &[CEffect], b: &mut [u32], out: &mut EffectBuf) -> bool {
+        for e in effs {
+            match e {
+                CEffect::Add(p, args) => with_key(*p, args, b, |k| out.push_fact(true, k)),
+                CEffect::Del(p, args) => with_key(*p, args, b, |k| out.push_fact(false, k)),
+                CEffect::Forall(vs, inner) => {
+                    if !self.forall_effects(vs, inner, b, out) {
+                        return false;
+                    }
+                }
+                CEffect::When(cond, inner) => {
+                    if self.holds(cond, b) && !self.effects(inner, b, out) {
+                        return false;
+                    }
+                }
+                CEffect::Num(op, f, args, e) => {
+                    let cur = with_key(*f, args, b, |k| self.s.value(k));
+                    let x = self.num(e, b);
+                    let v = match op {
+                        NumericEffectOp::Assign => x,
+                        NumericEffectOp::Increase => cur + x,
+                        NumericEffectOp::Decrease => cur - x,
+                        NumericEffectOp::ScaleUp => cur * x,
+                        NumericEffectOp::ScaleDown => {
+                            if x == 0.0 {
+                                f64::NAN
+                            } else {
+                                cur / x
+                            }
+                        }
+                    };
+                    if v.is_nan() {
+                        return false;
+                    }
+                    with_key(*f, args, b, |k| out.push_value(k, v));
+                }
+            }
+        }
+        true
+    }
+
+    fn forall_effects(
+        &self,
+        vs: &[(u16, u32)],
+        inner: &[CEffect],
+        b: &mut [u32],
+        out: &mut EffectBuf,
+    ) -> bool {
+        let Some(&(slot, ty)) = vs.first() else {
+            return self.effects(inner, b, out);
+        };
+        for &o in &self.c.type_objects[ty as usize] {
+            b[slot as usize] = o;
+            if !self.forall_effects(&vs[1..], inner, b, out) {
+                b[slot as usize] = UNBOUND;
+                return false;
+            }
+        }
+        b[slot as usize] = UNBOUND;
+        true
+    }
+}
+
+/// Effects collected before being applied: facts as `[len, pred, args..]` runs.
+#[derive(Default)]
+pub(crate) struct EffectBuf {
+    pub adds: Vec<u32>,
+    pub dels: Vec<u32>,
+    pub values: Vec<(Vec<u32>, f64)>,
+}
+
+impl EffectBuf {
+    pub fn clear(&mut self) {
+        self.adds.clear();
+        self.dels.clear();
+        self.values.clear();
+    }
+    fn push_fact(&mut self, add: bool, key: &[u32]) {
+        let v = if add { &mut self.adds } else { &mut self.dels };
+        v.push(key.len() as u32);
+        v.extend_from_slice(key);
+    }
+    fn push_value(&mut self, key: &[u32], v: f64) {
+        self.values.push((key.to_vec(), v));
+    }
+
+    /// Applies the collected effects: values, then deletes, then adds (an atom both added
+    /// and deleted ends up true, as in PDDL).
+    pub fn apply(&self, s: &mut State) {
+        for (k, v) in &self.values {
+            let id = s.intern_fluent(k);
+            s.set_value(id, *v);
+        }
+        let mut i = 0;
+        while i < self.dels.len() {
+            let n = self.dels[i] as usize;
+            if let Some(id) = s.facts.get(&self.dels[i + 1..i + 1 + n]) {
+                s.delete(id);
+            }
+            i += n + 1;
+        }
+        let mut i = 0;
+        while i < self.adds.len() {
+            let n = self.adds[i] as usize;
+            let id = s.intern_fact(&self.adds[i + 1..i + 1 + n]);
+            s.add(id);
+            i += n + 1;
+        }
+    }
+}

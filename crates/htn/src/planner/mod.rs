@@ -1,0 +1,201 @@
+//! The totally-ordered HTN planner: forward decomposition, depth first (the SHOP family).
+//!
+//! The search keeps the task network as a persistent stack (cells in an arena, so undoing a
+//! choice is resetting a pointer), the state with an undo trail, and one stack of choice points:
+//! method-and-binding choices of abstract tasks, and solution choices of evaluable predicates.
+//! Methods are tried in domain order, bindings in the order the binder finds them.
+//!
+//! Against endless descent: every node (state, remaining task network, geometric world) is
+//! fingerprinted and expanded at most once per search (a revisited node is either on the
+//! current path, a cycle, or already failed), and the task network's length is bounded; when
+//! the bound cut something off and no plan was found, the search restarts with the bound
+//! doubled (iterative deepening). A search that ends with nothing cut off proves the problem
+//! unsolvable.
+
+mod compile;
+mod eval;
+mod search;
+
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::{Domain, Problem};
+use crate::oracle::{GeometricOracle, OracleError};
+use crate::plan::Plan;
+
+/// How the search backtracks over the solutions of evaluable predicates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case", tag = "kind")]
+pub enum Strategy {
+    /// Each geometric task gives at most its first solution; only HTN choices are revisited
+    /// (the paper's experiment).
+    Symbolic,
+    /// Every choice point, latest first (interleaved backtracking).
+    #[default]
+    Chronological,
+    /// On a geometric failure, first try up to `k` other solutions of earlier geometric tasks,
+    /// newest first, keeping the HTN choices made since and re-planning the geometric tasks
+    /// after it; if none makes the failed task solvable, fall back to HTN alternatives (the
+    /// paper's Figure 3). Other solutions are tried only this way.
+    GeometricFirst { k: usize },
+}
+
+/// Search limits; `None` is unlimited.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    pub time: Option<Duration>,
+    pub nodes: Option<u64>,
+    /// Resident memory of the whole process, in MiB.
+    pub memory_mb: Option<u64>,
+}
+
+/// The limit that stopped a search.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Limit {
+    Time,
+    Nodes,
+    Memory,
+}
+
+impl std::fmt::Display for Limit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Limit::Time => "time limit",
+            Limit::Nodes => "node limit",
+            Limit::Memory => "memory limit",
+        })
+    }
+}
+
+/// Planner options.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlannerOptions {
+    pub limits: Limits,
+    /// Seeds the search's hashing; the search is deterministic for a given seed.
+    pub seed: u64,
+    pub strategy: Strategy,
+    /// The initial bound on the task network's length (doubled on each restart).
+    pub initial_depth_bound: usize,
+}
+
+impl Default for PlannerOptions {
+    fn default() -> Self {
+        PlannerOptions {
+            limits: Limits::default(),
+            seed: 0,
+            strategy: Strategy::default(),
+            initial_depth_bound: 1024,
+        }
+    }
+}
+
+/// What the search found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case", tag = "status")]
+pub enum Outcome {
+    /// A plan.
+    Found { plan: Plan },
+    /// The whole search space was explored: no plan exists (with [`Strategy::Symbolic`] or
+    /// [`Strategy::GeometricFirst`], within the geometric solutions that strategy tries).
+    Unsolvable,
+    /// A limit stopped the search.
+    LimitReached { limit: Limit },
+}
+
+/// Search statistics.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SearchStats {
+    /// Nodes expanded (tasks taken off the network).
+    pub nodes: u64,
+    /// Times an abstract task's next method or binding was tried after a failure.
+    pub htn_backtracks: u64,
+    /// Times a geometric task's next solution was asked for after a failure.
+    pub geo_backtracks: u64,
+    /// Nodes pruned because they were expanded before.
+    pub revisits_pruned: u64,
+    /// Nodes cut off by the task-network length bound.
+    pub depth_cutoffs: u64,
+    /// Searches run (1 + restarts with a doubled bound).
+    pub iterations: u32,
+    /// The task-network length bound of the last iteration.
+    pub depth_bound: usize,
+    /// Geometric-first repairs attempted and those that succeeded.
+    pub geo_repairs: u64,
+    pub geo_repairs_succeeded: u64,
+    /// Wall-clock time of the search, in seconds.
+    pub time_s: f64,
+    /// Peak resident memory of the process seen during the search, in KiB (0 if unknown).
+    pub peak_memory_kb: u64,
+    /// The geometric back end's own statistics, when one is plugged in.
+    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
+    pub geometric: serde_json::Value,
+}
+
+/// The result of a search: the outcome and how it went.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SearchResult {
+    #[serde(flatten)]
+    pub outcome: Outcome,
+    pub stats: SearchStats,
+}
+
+/// Why planning could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// The model is inconsistent (unknown names); the parser normally catches these.
+    #[error("invalid model: {0}")]
+    Model(String),
+    /// The domain uses evaluable predicates and no geometric back end was given.
+    #[error(
+        "action `{action}` is a GS action (its precondition holds `(evaluable ({task} ...))`): planning it needs a geometric back end (a scene), and none was given"
+    )]
+    NoOracle { action: String, task: String },
+    #[error(transparent)]
+    Oracle(#[from] OracleError),
+}
+
+/// Plans `problem` in `domain`. `oracle` answers evaluable predicates; without one, a domain
+/// with GS actions is refused with [`PlanError::NoOracle`].
+pub fn plan<'o>(
+    domain: &Domain,
+    problem: &Problem,
+    options: &PlannerOptions,
+    oracle: Option<&'o mut (dyn GeometricOracle + 'o)>,
+) -> Result<SearchResult, PlanError> {
+    let compiled = compile::compile(domain, problem)?;
+    if oracle.is_none()
+        && let Some(a) = compiled.actions.iter().find(|a| a.evaluable.is_some())
+    {
+        let g = a.evaluable.as_ref().map(|(g, _)| *g).unwrap_or(0);
+        return Err(PlanError::NoOracle {
+            action: a.name.clone(),
+            task: compiled.geo_tasks[g as usize].clone(),
+        });
+    }
+    search::Search::new(&compiled, options, oracle)?.run()
+}
+
+/// Resident memory of this process in KiB, from `/proc/self/statm` (0 where unavailable).
+pub fn current_rss_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .map_or(0, |pages| pages * 4)
+}
+
+/// Peak resident memory of this process in KiB (`VmHWM` of `/proc/self/status`; 0 where unavailable).
+pub fn peak_rss_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))?
+                .split_whitespace()
+                .nth(1)?
+                .parse()
+                .ok()
+        })
+        .unwrap_or(0)
+}

@@ -1,0 +1,998 @@
+//! The depth-first search itself: the task-network stack, choice points, backtracking
+//! strategies and limits. See the module documentation of `planner` for the design.
+
+use std::collections::{HashMap, HashSet, VecDeque};
+use std::hash::BuildHasherDefault;
+use std::time::Instant;
+
+use crate::oracle::{GeoSolution, GeometricOracle, OracleError, StreamId};
+use crate::plan::{Decomposition, GeoStep, Plan, PlanAction};
+use crate::state::{FxHasher, Interner, State, mix64};
+
+use super::compile::{CTerm, Compiled};
+use super::eval::{EffectBuf, Eval, UNBOUND};
+use super::{
+    Limit, Outcome, PlanError, PlannerOptions, SearchResult, SearchStats, Strategy, current_rss_kb,
+};
+
+const NIL: u32 = u32::MAX;
+
+/// One cell of the persistent task-network stack.
+#[derive(Clone, Copy)]
+struct Cell {
+    /// Ground task id.
+    task: u32,
+    /// Plan id of this task occurrence.
+    occ: u32,
+    next: u32,
+    /// Length of the network from this cell down.
+    len: u32,
+    /// Hash of the network from this cell down.
+    hash: u64,
+}
+
+struct Step {
+    occ: u32,
+    task: u32,
+    geo: Option<GeoStep>,
+}
+
+struct TreeRec {
+    occ: u32,
+    /// Ground task id, or `NIL` for the initial task network.
+    task: u32,
+    method: u32,
+    first: u32,
+    n: u32,
+}
+
+#[derive(Clone, Copy)]
+struct Marks {
+    arena: usize,
+    trail: usize,
+    steps: usize,
+    tree: usize,
+    next_occ: u32,
+}
+
+/// The choice taken at a choice point, for replaying a path.
+#[derive(Clone, Debug)]
+enum Key {
+    Htn { method: u32, binding: Vec<u32> },
+    Geo(usize),
+}
+
+struct HtnFrame {
+    occ: u32,
+    task: u32,
+    rest: u32,
+    /// Next position in the task's method list.
+    mpos: usize,
+    method: u32,
+    stride: usize,
+    bindings: Vec<u32>,
+    count: usize,
+    next: usize,
+    tried: u32,
+}
+
+struct GeoFrame {
+    occ: u32,
+    task: u32,
+    rest: u32,
+    action: u32,
+    slots: Vec<u32>,
+    stream: StreamId,
+    cache: Vec<GeoSolution>,
+    current: usize,
+    applied: bool,
+    exhausted: bool,
+}
+
+enum Kind {
+    Htn(HtnFrame),
+    Geo(GeoFrame),
+}
+
+struct Frame {
+    marks: Marks,
+    kind: Kind,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Mode {
+    Normal,
+    /// Replaying the recorded choices after taking another geometric solution.
+    Retry,
+    /// Replaying the original choices to return to the failure point.
+    Restore,
+}
+
+struct Repair {
+    path: Vec<Key>,
+    cands: Vec<usize>,
+    pos: usize,
+    tries_left: usize,
+    oldest: Option<usize>,
+    orig: HashMap<usize, usize>,
+}
+
+enum Stop {
+    Found,
+    Exhausted,
+    Limit(Limit),
+}
+
+pub(crate) struct Search<'a, 'o> {
+    c: &'a Compiled,
+    opts: PlannerOptions,
+    oracle: Option<&'o mut (dyn GeometricOracle + 'o)>,
+    state: State,
+    gtasks: Interner,
+    arena: Vec<Cell>,
+    top: u32,
+    steps: Vec<Step>,
+    tree: Vec<TreeRec>,
+    next_occ: u32,
+    frames: Vec<Frame>,
+    visited: HashSet<u128, BuildHasherDefault<FxHasher>>,
+    bound: usize,
+    cutoff: bool,
+    stats: SearchStats,
+    start: Instant,
+    effects: EffectBuf,
+    mode: Mode,
+    forced: VecDeque<Key>,
+    repair: Option<Repair>,
+    salt: u64,
+}
+
+impl<'a, 'o> Search<'a, 'o> {
+    pub fn new(
+        c: &'a Compiled,
+        opts: &PlannerOptions,
+        mut oracle: Option<&'o mut (dyn GeometricOracle + 'o)>,
+    ) -> Result<Search<'a, 'o>, PlanError> {
+        let salt = mix64(opts.seed ^ 0x6874_6e67_7470);
+        let mut state = State::new(c.preds.len(), salt);
+        for (p, args) in &c.init_facts {
+            let mut key = vec![*p];
+            key.extend(args);
+            let id = state.intern_fact(&key);
+            state.add(id);
+        }
+        if let Some(o) = oracle.as_deref_mut() {
+            for atom in o.initial_facts()? {
+                let key = atom_key(c, &atom.predicate, &atom.args)?;
+                let id = state.intern_fact(&key);
+                state.add(id);
+            }
+        }
+        for (f, args, v) in &c.init_values {
+            let mut key = vec![*f];
+            key.extend(args);
+            let id = state.intern_fluent(&key);
+            state.set_value(id, *v);
+        }
+        state.commit();
+        Ok(Search {
+            c,
+            opts: *opts,
+            oracle,
+            state,
+            gtasks: Interner::default(),
+            arena: Vec::new(),
+            top: NIL,
+            steps: Vec::new(),
+            tree: Vec::new(),
+            next_occ: 0,
+            frames: Vec::new(),
+            visited: HashSet::default(),
+            bound: opts.initial_depth_bound.max(1),
+            cutoff: false,
+            stats: SearchStats::default(),
+            start: Instant::now(),
+            effects: EffectBuf::default(),
+            mode: Mode::Normal,
+            forced: VecDeque::new(),
+            repair: None,
+            salt,
+        })
+    }
+
+    pub fn run(mut self) -> Result<SearchResult, PlanError> {
+        self.start = Instant::now();
+        let outcome = loop {
+            self.stats.iterations += 1;
+            self.stats.depth_bound = self.bound;
+            self.cutoff = false;
+            match self.dfs()? {
+                Stop::Found => {
+                    break Outcome::Found {
+                        plan: self.build_plan(),
+                    };
+                }
+                Stop::Limit(l) => break Outcome::LimitReached { limit: l },
+                Stop::Exhausted => {
+                    if !self.cutoff {
+                        break Outcome::Unsolvable;
+                    }
+                    self.reset();
+                    self.bound = self.bound.saturating_mul(2);
+                }
+            }
+        };
+        self.stats.time_s = self.start.elapsed().as_secs_f64();
+        self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
+        if let Some(o) = self.oracle.as_deref() {
+            self.stats.geometric = o.stats();
+        }
+        Ok(SearchResult {
+            outcome,
+            stats: self.stats,
+        })
+    }
+
+    /// Back to the initial node after an exhausted iteration.
+    fn reset(&mut self) {
+        while !self.frames.is_empty() {
+            self.restore_top();
+            self.pop_frame();
+        }
+        self.state.undo_to(0);
+        self.arena.clear();
+        self.steps.clear();
+        self.tree.clear();
+        self.next_occ = 0;
+        self.visited = HashSet::default();
+        self.top = NIL;
+    }
+
+    fn marks(&self) -> Marks {
+        Marks {
+            arena: self.arena.len(),
+            trail: self.state.mark(),
+            steps: self.steps.len(),
+            tree: self.tree.len(),
+            next_occ: self.next_occ,
+        }
+    }
+
+    fn check_limits(&mut self) -> Option<Limit> {
+        let l = self.opts.limits;
+        if let Some(n) = l.nodes
+            && self.stats.nodes >= n
+        {
+            return Some(Limit::Nodes);
+        }
+        if self.stats.nodes % 256 == 0
+            && let Some(t) = l.time
+            && self.start.elapsed() >= t
+        {
+            return Some(Limit::Time);
+        }
+        if self.stats.nodes % 4096 == 0 {
+            let rss = current_rss_kb();
+            self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(rss);
+            if let Some(mb) = l.memory_mb
+                && rss > mb * 1024
+            {
+                return Some(Limit::Memory);
+            }
+        }
+        None
+    }
+
+    fn dfs(&mut self) -> Result<Stop, PlanError> {
+        self.top = NIL;
+        if !self.push_htn_frame(NIL, NIL, NIL)? && !self.fail()? {
+            return Ok(Stop::Exhausted);
+        }
+        loop {
+            if let Some(l) = self.check_limits() {
+                return Ok(Stop::Limit(l));
+            }
+            if self.top == NIL {
+                if self.goal_holds() {
+                    return Ok(Stop::Found);
+                }
+                if !self.fail()? {
+                    return Ok(Stop::Exhausted);
+                }
+                continue;
+            }
+            self.stats.nodes += 1;
+            let cell = self.arena[self.top as usize];
+            let ok = if cell.len as usize > self.bound {
+                self.cutoff = true;
+                self.stats.depth_cutoffs += 1;
+                false
+            } else if self.mode == Mode::Normal && !self.first_visit(cell.hash) {
+                self.stats.revisits_pruned += 1;
+                false
+            } else {
+                let task = self.gtasks.key(cell.task)[0];
+                match self.c.tasks[task as usize].action {
+                    Some(a) => self.expand_action(a, cell)?,
+                    None => self.push_htn_frame(cell.task, cell.occ, cell.next)?,
+                }
+            };
+            if !ok && !self.fail()? {
+                return Ok(Stop::Exhausted);
+            }
+        }
+    }
+
+    fn first_visit(&mut self, net_hash: u64) -> bool {
+        let world = self.oracle.as_deref().map_or(0, |o| o.world_fingerprint());
+        let h = self.state.hash() ^ mix64(world ^ self.salt);
+        self.visited.insert(((h as u128) << 64) | net_hash as u128)
+    }
+
+    fn goal_holds(&mut self) -> bool {
+        let mut b = vec![UNBOUND; self.c.goal_slot_types.len()];
+        let ev = Eval {
+            c: self.c,
+            s: &self.state,
+            types: &self.c.goal_slot_types,
+        };
+        ev.holds(&self.c.goal, &mut b)
+    }
+
+    /// A search failure at the current node.
+    fn fail(&mut self) -> Result<bool, PlanError> {
+        match self.mode {
+            Mode::Normal => self.backtrack(),
+            Mode::Retry => self.next_repair_try(),
+            Mode::Restore => {
+                // The replay of the original choices did not reproduce them (a back end that
+                // is not deterministic): give up the repair and backtrack from here.
+                self.end_repair();
+                self.backtrack()
+            }
+        }
+    }
+
+    fn backtrack(&mut self) -> Result<bool, PlanError> {
+        while !self.frames.is_empty() {
+            self.restore_top();
+            if self.next_alternative()? {
+                return Ok(true);
+            }
+            self.pop_frame();
+        }
+        Ok(false)
+    }
+
+    /// Undoes everything done since the top frame was created (keeps the frame).
+    fn restore_top(&mut self) {
+        let f = self.frames.last_mut().expect("a frame to restore");
+        let m = f.marks;
+        if let Kind::Geo(g) = &mut f.kind
+            && g.applied
+        {
+            g.applied = false;
+            if let Some(o) = self.oracle.as_deref_mut() {
+                o.undo();
+            }
+        }
+        self.state.undo_to(m.trail);
+        self.arena.truncate(m.arena);
+        self.steps.truncate(m.steps);
+        self.tree.truncate(m.tree);
+        self.next_occ = m.next_occ;
+    }
+
+    fn pop_frame(&mut self) {
+        let f = self.frames.pop().expect("a frame to pop");
+        if let Kind::Geo(g) = f.kind
+            && let Some(o) = self.oracle.as_deref_mut()
+        {
+            if g.applied {
+                o.undo();
+            }
+            o.close(g.stream);
+        }
+    }
+
+    fn push_cell(&mut self, task: u32, occ: u32, next: u32) -> u32 {
+        let (len, h) = if next == NIL {
+            (0, 0)
+        } else {
+            let n = &self.arena[next as usize];
+            (n.len, n.hash)
+        };
+        let hash = mix64(h.rotate_left(7) ^ mix64(task as u64 ^ self.salt));
+        self.arena.push(Cell {
+            task,
+            occ,
+            next,
+            len: len + 1,
+            hash,
+        });
+        (self.arena.len() - 1) as u32
+    }
+
+    fn methods_of(&self, task: u32) -> &'a [u32] {
+        let c = self.c;
+        if task == NIL {
+            std::slice::from_ref(&c.root_method)
+        } else {
+            let t = self.gtasks.key(task)[0];
+            &c.tasks[t as usize].methods
+        }
+    }
+
+    /// All bindings of method `m`'s parameters for ground task `task`, flat.
+    fn bindings(&self, m: u32, task: u32) -> (Vec<u32>, usize) {
+        let c = self.c;
+        let method = &c.methods[m as usize];
+        let mut b = vec![UNBOUND; method.slot_types.len()];
+        if task != NIL {
+            let args = &self.gtasks.key(task)[1..];
+            if args.len() != method.task_args.len() {
+                return (Vec::new(), 0);
+            }
+            for (t, &a) in method.task_args.iter().zip(args) {
+                match *t {
+                    CTerm::Obj(o) => {
+                        if o != a {
+                            return (Vec::new(), 0);
+                        }
+                    }
+                    CTerm::Var(v) => {
+                        let cur = b[v as usize];
+                        if cur == UNBOUND {
+                            if !c.is_of(a, method.slot_types[v as usize]) {
+                                return (Vec::new(), 0);
+                            }
+                            b[v as usize] = a;
+                        } else if cur != a {
+                            return (Vec::new(), 0);
+                        }
+                    }
+                }
+            }
+        }
+        let need: Vec<u16> = (0..method.n_params as u16).collect();
+        let n = method.n_params;
+        let mut out = Vec::new();
+        let mut count = 0;
+        let ev = Eval {
+            c,
+            s: &self.state,
+            types: &method.slot_types,
+        };
+        ev.solve(&method.pre, &mut b, &need, &mut |bb| {
+            out.extend_from_slice(&bb[..n]);
+            count += 1;
+            false
+        });
+        (out, count)
+    }
+
+    fn push_htn_frame(&mut self, task: u32, occ: u32, rest: u32) -> Result<bool, PlanError> {
+        let marks = self.marks();
+        self.frames.push(Frame {
+            marks,
+            kind: Kind::Htn(HtnFrame {
+                occ,
+                task,
+                rest,
+                mpos: 0,
+                method: 0,
+                stride: 0,
+                bindings: Vec::new(),
+                count: 0,
+                next: 0,
+                tried: 0,
+            }),
+        });
+        if self.mode != Mode::Normal && !self.forced.is_empty() {
+            let Some(Key::Htn { method, binding }) = self.forced.pop_front() else {
+                return Ok(false);
+            };
+            let methods = self.methods_of(task);
+            let Some(pos) = methods.iter().position(|&m| m == method) else {
+                return Ok(false);
+            };
+            let (bindings, count) = self.bindings(method, task);
+            let stride = self.c.methods[method as usize].n_params;
+            let Some(idx) = (0..count).find(|&i| bindings[i * stride..(i + 1) * stride] == binding)
+            else {
+                return Ok(false);
+            };
+            let Some(Frame {
+                kind: Kind::Htn(f), ..
+            }) = self.frames.last_mut()
+            else {
+                unreachable!()
+            };
+            f.mpos = pos + 1;
+            f.method = method;
+            f.stride = stride;
+            f.bindings = bindings;
+            f.count = count;
+            f.next = idx + 1;
+            f.tried = 1;
+            self.apply_method(method, &binding);
+            return Ok(true);
+        }
+        self.next_alternative()
+    }
+
+    /// Tries the top frame's next alternative (the frame is restored).
+    fn next_alternative(&mut self) -> Result<bool, PlanError> {
+        let top = self.frames.len() - 1;
+        match &mut self.frames[top].kind {
+            Kind::Htn(_) => Ok(self.next_method_alternative(top)),
+            Kind::Geo(g) => {
+                if self.opts.strategy != Strategy::Chronological || g.exhausted {
+                    return Ok(false);
+                }
+                loop {
+                    let Kind::Geo(g) = &self.frames[top].kind else {
+                        unreachable!()
+                    };
+                    let idx = g.current + 1;
+                    if !self.fetch(top, idx)? {
+                        return Ok(false);
+                    }
+                    self.stats.geo_backtracks += 1;
+                    if let Kind::Geo(g) = &mut self.frames[top].kind {
+                        g.current = idx;
+                    }
+                    if self.apply_geo(top)? {
+                        return Ok(true);
+                    }
+                }
+            }
+        }
+    }
+
+    fn next_method_alternative(&mut self, top: usize) -> bool {
+        loop {
+            let Kind::Htn(f) = &mut self.frames[top].kind else {
+                unreachable!()
+            };
+            if f.next < f.count {
+                let i = f.next;
+                f.next += 1;
+                if f.tried > 0 {
+                    self.stats.htn_backtracks += 1;
+                }
+                f.tried += 1;
+                let m = f.method;
+                let binding = f.bindings[i * f.stride..(i + 1) * f.stride].to_vec();
+                self.apply_method(m, &binding);
+                return true;
+            }
+            let (task, mpos) = (f.task, f.mpos);
+            let methods = self.methods_of(task);
+            if mpos >= methods.len() {
+                return false;
+            }
+            let m = methods[mpos];
+            let (bindings, count) = self.bindings(m, task);
+            let Kind::Htn(f) = &mut self.frames[top].kind else {
+                unreachable!()
+            };
+            f.mpos = mpos + 1;
+            f.method = m;
+            f.stride = self.c.methods[m as usize].n_params;
+            f.bindings = bindings;
+            f.count = count;
+            f.next = 0;
+        }
+    }
+
+    /// Decomposes the top frame's task with method `m` under `binding`.
+    fn apply_method(&mut self, m: u32, binding: &[u32]) {
+        let top = self.frames.len() - 1;
+        let Kind::Htn(f) = &self.frames[top].kind else {
+            unreachable!()
+        };
+        let (occ, task, rest) = (f.occ, f.task, f.rest);
+        let method = &self.c.methods[m as usize];
+        let first = self.next_occ;
+        let n = method.subtasks.len() as u32;
+        self.tree.push(TreeRec {
+            occ,
+            task,
+            method: m,
+            first,
+            n,
+        });
+        self.next_occ += n;
+        let mut top_cell = rest;
+        let mut key: Vec<u32> = Vec::with_capacity(8);
+        for (i, (t, args)) in method.subtasks.iter().enumerate().rev() {
+            key.clear();
+            key.push(*t);
+            key.extend(args.iter().map(|a| match *a {
+                CTerm::Var(v) => binding[v as usize],
+                CTerm::Obj(o) => o,
+            }));
+            let gt = self.gtasks.intern(&key);
+            top_cell = self.push_cell(gt, first + i as u32, top_cell);
+        }
+        self.top = top_cell;
+    }
+
+    /// The slots of action `a` bound to the arguments of ground task `task`, if their types fit.
+    fn action_slots(&self, a: u32, task: u32) -> Option<Vec<u32>> {
+        let act = &self.c.actions[a as usize];
+        let args = &self.gtasks.key(task)[1..];
+        if args.len() != act.n_params {
+            return None;
+        }
+        let mut slots = vec![UNBOUND; act.slot_types.len()];
+        for (i, &o) in args.iter().enumerate() {
+            if !self.c.is_of(o, act.slot_types[i]) {
+                return None;
+            }
+            slots[i] = o;
+        }
+        Some(slots)
+    }
+
+    fn expand_action(&mut self, a: u32, cell: Cell) -> Result<bool, PlanError> {
+        let c = self.c;
+        let act = &c.actions[a as usize];
+        let Some(mut slots) = self.action_slots(a, cell.task) else {
+            return Ok(false);
+        };
+        let ev = Eval {
+            c,
+            s: &self.state,
+            types: &act.slot_types,
+        };
+        if !ev.all_hold(&act.pre, &mut slots) {
+            return Ok(false);
+        }
+        if act.evaluable.is_some() {
+            return self.expand_gs(a, cell, slots);
+        }
+        self.effects.clear();
+        if !ev.effects(&act.effects, &mut slots, &mut self.effects) {
+            return Ok(false);
+        }
+        self.effects.apply(&mut self.state);
+        self.steps.push(Step {
+            occ: cell.occ,
+            task: cell.task,
+            geo: None,
+        });
+        self.top = cell.next;
+        Ok(true)
+    }
+
+    fn expand_gs(&mut self, a: u32, cell: Cell, slots: Vec<u32>) -> Result<bool, PlanError> {
+        if self.mode == Mode::Restore && self.forced.is_empty() {
+            // Back at the failure point with the original choices: fall back to HTN
+            // backtracking from here.
+            self.end_repair();
+            return Ok(false);
+        }
+        let c = self.c;
+        let (g, args) = c.actions[a as usize]
+            .evaluable
+            .as_ref()
+            .expect("a GS action");
+        let names: Vec<String> = args
+            .iter()
+            .map(|t| {
+                let o = match *t {
+                    CTerm::Var(v) => slots[v as usize],
+                    CTerm::Obj(o) => o,
+                };
+                c.objects[o as usize].clone()
+            })
+            .collect();
+        let oracle = self
+            .oracle
+            .as_deref_mut()
+            .expect("GS actions need an oracle");
+        let stream = oracle.open(&c.geo_tasks[*g as usize], &names)?;
+        let marks = self.marks();
+        self.frames.push(Frame {
+            marks,
+            kind: Kind::Geo(GeoFrame {
+                occ: cell.occ,
+                task: cell.task,
+                rest: cell.next,
+                action: a,
+                slots,
+                stream,
+                cache: Vec::new(),
+                current: 0,
+                applied: false,
+                exhausted: false,
+            }),
+        });
+        let top = self.frames.len() - 1;
+        let replaying = self.mode != Mode::Normal && !self.forced.is_empty();
+        let want = if replaying {
+            match self.forced.pop_front() {
+                Some(Key::Geo(j)) if self.mode == Mode::Restore => j,
+                Some(Key::Geo(_)) => 0,
+                _ => return Ok(false),
+            }
+        } else {
+            0
+        };
+        if self.fetch(top, want)? {
+            if let Kind::Geo(gf) = &mut self.frames[top].kind {
+                gf.current = want;
+            }
+            if self.apply_geo(top)? {
+                if self.mode == Mode::Retry && self.forced.is_empty() {
+                    // The failed geometric task has a solution after the repair.
+                    self.stats.geo_repairs_succeeded += 1;
+                    self.end_repair();
+                }
+                return Ok(true);
+            }
+        }
+        // A geometric failure.
+        if self.mode == Mode::Normal
+            && let Strategy::GeometricFirst { k } = self.opts.strategy
+            && k > 0
+        {
+            self.pop_frame();
+            return self.start_repair(k);
+        }
+        Ok(false)
+    }
+
+    /// Makes solution `idx` of geo frame `fi` available in its cache; `false` if the stream
+    /// has fewer solutions.
+    fn fetch(&mut self, fi: usize, idx: usize) -> Result<bool, PlanError> {
+        loop {
+            let Kind::Geo(g) = &mut self.frames[fi].kind else {
+                unreachable!()
+            };
+            if idx < g.cache.len() {
+                return Ok(true);
+            }
+            if g.exhausted || (self.opts.strategy == Strategy::Symbolic && !g.cache.is_empty()) {
+                return Ok(false);
+            }
+            let oracle = self
+                .oracle
+                .as_deref_mut()
+                .expect("GS actions need an oracle");
+            match oracle.next_solution(g.stream)? {
+                Some(s) => g.cache.push(s),
+                None => {
+                    g.exhausted = true;
+                    return Ok(false);
+                }
+            }
+        }
+    }
+
+    /// Takes the current solution of geo frame `fi` (the top frame, restored).
+    fn apply_geo(&mut self, fi: usize) -> Result<bool, PlanError> {
+        let c = self.c;
+        let Kind::Geo(g) = &mut self.frames[fi].kind else {
+            unreachable!()
+        };
+        let act = &c.actions[g.action as usize];
+        let ev = Eval {
+            c,
+            s: &self.state,
+            types: &act.slot_types,
+        };
+        self.effects.clear();
+        if !ev.effects(&act.effects, &mut g.slots, &mut self.effects) {
+            return Ok(false);
+        }
+        self.effects.apply(&mut self.state);
+        let sol = &g.cache[g.current];
+        for atom in &sol.delete {
+            let key = atom_key(c, &atom.predicate, &atom.args)?;
+            if let Some(id) = self.state.facts.get(&key) {
+                self.state.delete(id);
+            }
+        }
+        for atom in &sol.add {
+            let key = atom_key(c, &atom.predicate, &atom.args)?;
+            let id = self.state.intern_fact(&key);
+            self.state.add(id);
+        }
+        let oracle = self
+            .oracle
+            .as_deref_mut()
+            .expect("GS actions need an oracle");
+        oracle.apply(sol)?;
+        g.applied = true;
+        let (gt, gargs) = act.evaluable.as_ref().expect("a GS action");
+        let geo = GeoStep {
+            task: c.geo_tasks[*gt as usize].clone(),
+            args: gargs
+                .iter()
+                .map(|t| match *t {
+                    CTerm::Var(v) => c.objects[g.slots[v as usize] as usize].clone(),
+                    CTerm::Obj(o) => c.objects[o as usize].clone(),
+                })
+                .collect(),
+            add: sol.add.clone(),
+            delete: sol.delete.clone(),
+            payload: sol.payload.clone(),
+        };
+        self.steps.push(Step {
+            occ: g.occ,
+            task: g.task,
+            geo: Some(geo),
+        });
+        self.top = g.rest;
+        Ok(true)
+    }
+
+    fn key_of(f: &Frame) -> Key {
+        match &f.kind {
+            Kind::Htn(h) => {
+                let i = h.next - 1;
+                Key::Htn {
+                    method: h.method,
+                    binding: h.bindings[i * h.stride..(i + 1) * h.stride].to_vec(),
+                }
+            }
+            Kind::Geo(g) => Key::Geo(g.current),
+        }
+    }
+
+    fn start_repair(&mut self, k: usize) -> Result<bool, PlanError> {
+        let path: Vec<Key> = self.frames.iter().map(Self::key_of).collect();
+        let cands: Vec<usize> = (0..self.frames.len())
+            .rev()
+            .filter(|&i| matches!(&self.frames[i].kind, Kind::Geo(g) if !(g.exhausted && g.current + 1 >= g.cache.len())))
+            .collect();
+        if cands.is_empty() {
+            return self.backtrack();
+        }
+        let orig = cands
+            .iter()
+            .map(|&i| match &self.frames[i].kind {
+                Kind::Geo(g) => (i, g.current),
+                Kind::Htn(_) => unreachable!(),
+            })
+            .collect();
+        self.stats.geo_repairs += 1;
+        self.repair = Some(Repair {
+            path,
+            cands,
+            pos: 0,
+            tries_left: k,
+            oldest: None,
+            orig,
+        });
+        self.mode = Mode::Retry;
+        self.next_repair_try()
+    }
+
+    fn unwind_to(&mut self, fi: usize) {
+        while self.frames.len() > fi + 1 {
+            self.pop_frame();
+        }
+        self.restore_top();
+    }
+
+    fn next_repair_try(&mut self) -> Result<bool, PlanError> {
+        loop {
+            let r = self.repair.as_mut().expect("a repair in progress");
+            if r.pos >= r.cands.len() || r.tries_left == 0 {
+                return self.restore_after_repair();
+            }
+            let g = r.cands[r.pos];
+            r.oldest = Some(g);
+            self.unwind_to(g);
+            let Kind::Geo(gf) = &self.frames[g].kind else {
+                unreachable!()
+            };
+            let idx = gf.current + 1;
+            if !self.fetch(g, idx)? {
+                self.repair.as_mut().expect("a repair").pos += 1;
+                continue;
+            }
+            self.stats.geo_backtracks += 1;
+            let r = self.repair.as_mut().expect("a repair");
+            r.tries_left -= 1;
+            let forced: VecDeque<Key> = r.path[g + 1..].iter().cloned().collect();
+            if let Kind::Geo(gf) = &mut self.frames[g].kind {
+                gf.current = idx;
+            }
+            if self.apply_geo(g)? {
+                self.forced = forced;
+                self.mode = Mode::Retry;
+                return Ok(true);
+            }
+        }
+    }
+
+    fn restore_after_repair(&mut self) -> Result<bool, PlanError> {
+        let r = self.repair.as_ref().expect("a repair");
+        let Some(t) = r.oldest else {
+            self.end_repair();
+            return self.backtrack();
+        };
+        let orig = r.orig[&t];
+        let forced: VecDeque<Key> = r.path[t + 1..].iter().cloned().collect();
+        self.unwind_to(t);
+        if let Kind::Geo(gf) = &mut self.frames[t].kind {
+            gf.current = orig;
+        }
+        if !self.apply_geo(t)? {
+            self.end_repair();
+            return self.backtrack();
+        }
+        self.forced = forced;
+        self.mode = Mode::Restore;
+        Ok(true)
+    }
+
+    fn end_repair(&mut self) {
+        self.repair = None;
+        self.forced.clear();
+        self.mode = Mode::Normal;
+    }
+
+    fn build_plan(&self) -> Plan {
+        let c = self.c;
+        let names = |gt: u32| -> (String, Vec<String>) {
+            let k = self.gtasks.key(gt);
+            (
+                c.tasks[k[0] as usize].name.clone(),
+                k[1..]
+                    .iter()
+                    .map(|&o| c.objects[o as usize].clone())
+                    .collect(),
+            )
+        };
+        let mut plan = Plan::default();
+        for s in &self.steps {
+            let (name, args) = names(s.task);
+            plan.actions.push(PlanAction {
+                id: s.occ,
+                name,
+                args,
+                geometric: s.geo.clone(),
+            });
+        }
+        for t in &self.tree {
+            let ids: Vec<u32> = (t.first..t.first + t.n).collect();
+            if t.task == NIL {
+                plan.root = ids;
+                continue;
+            }
+            let (task, args) = names(t.task);
+            plan.decompositions.push(Decomposition {
+                id: t.occ,
+                task,
+                args,
+                method: c.methods[t.method as usize].name.clone(),
+                subtasks: ids,
+            });
+        }
+        plan
+    }
+}
+
+/// The fact key of a shared literal given by name.
+fn atom_key(c: &Compiled, predicate: &str, args: &[String]) -> Result<Vec<u32>, OracleError> {
+    let p = c.pred_ids.get(predicate).ok_or_else(|| {
+        OracleError(format!(
+            "the back end gave a literal of unknown predicate `{predicate}`"
+        ))
+    })?;
+    let mut key = vec![*p];
+    for a in args {
+        key.push(*c.object_ids.get(a).ok_or_else(|| {
+            OracleError(format!(
+                "the back end gave a literal over unknown object `{a}` ({predicate})"
+            ))
+        })?);
+    }
+    Ok(key)
+}

@@ -1,0 +1,669 @@
+//! The plan validator: checks a plan against the lifted domain and problem, independently of the
+//! planner (its own name-based state and formula evaluation; nothing shared with the search).
+//!
+//! It checks, and names the first fault it finds:
+//! - ids unique, every id used exactly once in the tree, the tree rooted at `root`;
+//! - `root` matches the problem's initial task network (names, arguments, order);
+//! - every decomposition line names a method of that task whose task arguments and subtasks
+//!   (names, order, arguments) agree with one binding of its parameters (of the right types);
+//! - the leaves of the tree, left to right, are exactly the plan's actions in order;
+//! - the actions are executable in order from the initial state (numeric fluents included),
+//!   with the shared literals of a GS action's geometric solution applied after its effects;
+//! - each method's precondition (and `:constraints`) holds in the state before its first
+//!   primitive descendant, or, for a method with none, in the state at its place in the
+//!   sequence; parameters bound by neither task nor subtasks are existential;
+//! - the goal, if any, holds at the end.
+
+use std::collections::{HashMap, HashSet};
+
+use crate::model::{
+    ArithOp, CompareOp, Domain, Effect, Formula, Method, NumExpr, NumericEffectOp, OBJECT_TYPE,
+    Problem, Term, TypedName,
+};
+use crate::oracle::GroundAtom;
+use crate::plan::Plan;
+
+/// The first fault found in a plan.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("invalid plan: {0}")]
+pub struct Fault(pub String);
+
+type Key = Vec<String>;
+
+struct World<'a> {
+    domain: &'a Domain,
+    /// Object to its types (declared type and all ancestors, and `object`).
+    types: HashMap<String, HashSet<String>>,
+    /// Type to its objects.
+    objects_of: HashMap<String, Vec<String>>,
+}
+
+#[derive(Clone, Default)]
+struct St {
+    facts: HashSet<Key>,
+    values: HashMap<Key, f64>,
+}
+
+type Env = HashMap<String, String>;
+
+/// Checks `plan` for `problem` of `domain`. `shared_init` are the initial facts of the shared
+/// predicates (from the geometric back end; empty for plain HDDL).
+pub fn validate(
+    domain: &Domain,
+    problem: &Problem,
+    plan: &Plan,
+    shared_init: &[GroundAtom],
+) -> Result<(), Fault> {
+    let w = World::new(domain, problem);
+    let fault = |m: String| Err(Fault(m));
+
+    // Ids.
+    let mut action_at: HashMap<u32, usize> = HashMap::new();
+    for (i, a) in plan.actions.iter().enumerate() {
+        if action_at.insert(a.id, i).is_some() {
+            return fault(format!("id {} is used by two actions", a.id));
+        }
+    }
+    let mut dec_of: HashMap<u32, usize> = HashMap::new();
+    for (i, d) in plan.decompositions.iter().enumerate() {
+        if action_at.contains_key(&d.id) {
+            return fault(format!(
+                "id {} is both an action and a decomposed task",
+                d.id
+            ));
+        }
+        if dec_of.insert(d.id, i).is_some() {
+            return fault(format!("task id {} is decomposed twice", d.id));
+        }
+    }
+
+    // The tree: every id used exactly once, leaves in order.
+    let mut used: HashSet<u32> = HashSet::new();
+    let mut leaves: Vec<u32> = Vec::new();
+    // (decomposition index, leaf position) in depth-first order.
+    let mut dec_pos: Vec<(usize, usize)> = Vec::new();
+    fn walk(
+        id: u32,
+        plan: &Plan,
+        action_at: &HashMap<u32, usize>,
+        dec_of: &HashMap<u32, usize>,
+        used: &mut HashSet<u32>,
+        leaves: &mut Vec<u32>,
+        dec_pos: &mut Vec<(usize, usize)>,
+    ) -> Result<(), Fault> {
+        if !used.insert(id) {
+            return Err(Fault(format!(
+                "id {id} occurs twice in the decomposition tree"
+            )));
+        }
+        if action_at.contains_key(&id) {
+            leaves.push(id);
+            return Ok(());
+        }
+        let Some(&d) = dec_of.get(&id) else {
+            return Err(Fault(format!(
+                "id {id} is neither an action nor a decomposed task"
+            )));
+        };
+        dec_pos.push((d, leaves.len()));
+        for &c in &plan.decompositions[d].subtasks {
+            walk(c, plan, action_at, dec_of, used, leaves, dec_pos)?;
+        }
+        Ok(())
+    }
+    for &r in &plan.root {
+        walk(
+            r,
+            plan,
+            &action_at,
+            &dec_of,
+            &mut used,
+            &mut leaves,
+            &mut dec_pos,
+        )?;
+    }
+    for a in &plan.actions {
+        if !used.contains(&a.id) {
+            return fault(format!(
+                "action {} ({}) is not reached from the root",
+                a.id, a.name
+            ));
+        }
+    }
+    for d in &plan.decompositions {
+        if !used.contains(&d.id) {
+            return fault(format!(
+                "decomposed task {} ({}) is not reached from the root",
+                d.id, d.task
+            ));
+        }
+    }
+    for (i, (&leaf, a)) in leaves.iter().zip(&plan.actions).enumerate() {
+        if leaf != a.id {
+            return fault(format!(
+                "the tree puts action {leaf} at position {} of the plan, but the plan lists action {} there",
+                i + 1,
+                a.id
+            ));
+        }
+    }
+
+    // The name and arguments of an id.
+    let name_args = |id: u32| -> (&str, &[String]) {
+        if let Some(&i) = action_at.get(&id) {
+            (&plan.actions[i].name, &plan.actions[i].args)
+        } else {
+            let d = &plan.decompositions[dec_of[&id]];
+            (&d.task, &d.args)
+        }
+    };
+
+    // Root against the initial task network.
+    let net = &problem.htn.subtasks;
+    if net.len() != plan.root.len() {
+        return fault(format!(
+            "the root has {} tasks, the problem's initial task network {}",
+            plan.root.len(),
+            net.len()
+        ));
+    }
+    let mut root_env: Env = Env::new();
+    for (k, (st, &id)) in net.iter().zip(&plan.root).enumerate() {
+        let (name, args) = name_args(id);
+        if st.name != name || !unify(&w, &mut root_env, &st.args, args, &problem.htn.params) {
+            return fault(format!(
+                "root task {} is `{name}` with arguments {args:?}, but task {} of the initial network is ({} {})",
+                id,
+                k + 1,
+                st.name,
+                show_terms(&st.args)
+            ));
+        }
+    }
+
+    // Decomposition lines against methods; remember each one's binding.
+    let mut bindings: Vec<Env> = vec![Env::new(); plan.decompositions.len()];
+    for (i, d) in plan.decompositions.iter().enumerate() {
+        let Some(task) = domain.tasks.iter().find(|t| t.name == d.task) else {
+            return fault(format!(
+                "task {} `{}` is not an abstract task of the domain",
+                d.id, d.task
+            ));
+        };
+        if task.params.len() != d.args.len() {
+            return fault(format!(
+                "task {} `{}` has {} arguments, the domain declares {}",
+                d.id,
+                d.task,
+                d.args.len(),
+                task.params.len()
+            ));
+        }
+        for (p, a) in task.params.iter().zip(&d.args) {
+            if !w.is_of(a, &p.ty) {
+                return fault(format!(
+                    "task {} `{}`: `{a}` is not an object of type `{}`",
+                    d.id, d.task, p.ty
+                ));
+            }
+        }
+        let Some(m) = domain.methods.iter().find(|m| m.name == d.method) else {
+            return fault(format!(
+                "task {}: `{}` is not a method of the domain",
+                d.id, d.method
+            ));
+        };
+        if m.task != d.task {
+            return fault(format!(
+                "task {}: method `{}` decomposes `{}`, not `{}`",
+                d.id, m.name, m.task, d.task
+            ));
+        }
+        let mut env = Env::new();
+        if !unify(&w, &mut env, &m.task_args, &d.args, &m.params) {
+            return fault(format!(
+                "task {} ({} {}): the arguments do not match method `{}`'s task ({} {})",
+                d.id,
+                d.task,
+                d.args.join(" "),
+                m.name,
+                m.task,
+                show_terms(&m.task_args)
+            ));
+        }
+        if m.subtasks.len() != d.subtasks.len() {
+            return fault(format!(
+                "task {}: method `{}` has {} subtasks, the plan gives {}",
+                d.id,
+                m.name,
+                m.subtasks.len(),
+                d.subtasks.len()
+            ));
+        }
+        for (k, (st, &c)) in m.subtasks.iter().zip(&d.subtasks).enumerate() {
+            let (name, args) = name_args(c);
+            if st.name != name || !unify(&w, &mut env, &st.args, args, &m.params) {
+                return fault(format!(
+                    "task {}: subtask {} of method `{}` is ({} {}), but id {c} is ({name} {})",
+                    d.id,
+                    k + 1,
+                    m.name,
+                    st.name,
+                    show_terms(&st.args),
+                    args.join(" ")
+                ));
+            }
+        }
+        bindings[i] = env;
+    }
+
+    // Execute, checking method preconditions at their places.
+    let mut st = St::default();
+    for f in &problem.init {
+        st.facts.insert(key(&f.predicate, &f.args));
+    }
+    for a in shared_init {
+        st.facts.insert(key(&a.predicate, &a.args));
+    }
+    for v in &problem.init_values {
+        st.values.insert(key(&v.function, &v.args), v.value);
+    }
+    let mut next_dec = 0;
+    for pos in 0..=plan.actions.len() {
+        while next_dec < dec_pos.len() && dec_pos[next_dec].1 == pos {
+            let di = dec_pos[next_dec].0;
+            let d = &plan.decompositions[di];
+            let m = domain
+                .methods
+                .iter()
+                .find(|m| m.name == d.method)
+                .expect("checked above");
+            if !w.method_pre_holds(&st, m, &bindings[di]) {
+                let when = if pos < plan.actions.len() {
+                    format!("before action {}", plan.actions[pos].id)
+                } else {
+                    "at the end of the plan".to_string()
+                };
+                return fault(format!(
+                    "task {} ({} {}): the precondition of method `{}` does not hold {when}",
+                    d.id,
+                    d.task,
+                    d.args.join(" "),
+                    m.name
+                ));
+            }
+            next_dec += 1;
+        }
+        if pos == plan.actions.len() {
+            break;
+        }
+        let a = &plan.actions[pos];
+        w.execute(&mut st, a).map_err(|m| {
+            Fault(format!(
+                "action {} ({} {}): {m}",
+                a.id,
+                a.name,
+                a.args.join(" ")
+            ))
+        })?;
+    }
+    let mut env = Env::new();
+    if !w.holds(&st, &problem.goal, &mut env) {
+        return fault("the goal does not hold at the end of the plan".to_string());
+    }
+    if !w.holds(&st, &problem.htn.constraints, &mut root_env) {
+        return fault("the initial task network's constraints do not hold".to_string());
+    }
+    Ok(())
+}
+
+fn key(head: &str, args: &[String]) -> Key {
+    let mut k = Vec::with_capacity(args.len() + 1);
+    k.push(head.to_string());
+    k.extend(args.iter().cloned());
+    k
+}
+
+fn show_terms(ts: &[Term]) -> String {
+    ts.iter()
+        .map(|t| match t {
+            Term::Var(v) | Term::Const(v) => v.as_str(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Extends `env` so that `terms` denote `args`; variables must be among `params` and the
+/// objects of their types.
+fn unify(w: &World, env: &mut Env, terms: &[Term], args: &[String], params: &[TypedName]) -> bool {
+    if terms.len() != args.len() {
+        return false;
+    }
+    for (t, a) in terms.iter().zip(args) {
+        match t {
+            Term::Const(c) => {
+                if c != a {
+                    return false;
+                }
+            }
+            Term::Var(v) => match env.get(v) {
+                Some(b) => {
+                    if b != a {
+                        return false;
+                    }
+                }
+                None => {
+                    let Some(p) = params.iter().find(|p| &p.name == v) else {
+                        return false;
+                    };
+                    if !w.is_of(a, &p.ty) {
+                        return false;
+                    }
+                    env.insert(v.clone(), a.clone());
+                }
+            },
+        }
+    }
+    true
+}
+
+impl<'a> World<'a> {
+    fn new(domain: &'a Domain, problem: &Problem) -> World<'a> {
+        let mut parents: HashMap<&str, Vec<&str>> = HashMap::new();
+        for t in &domain.types {
+            parents
+                .entry(t.name.as_str())
+                .or_default()
+                .extend(t.parents.iter().map(String::as_str));
+        }
+        let mut types: HashMap<String, HashSet<String>> = HashMap::new();
+        for o in domain.constants.iter().chain(&problem.objects) {
+            let set = types.entry(o.name.clone()).or_default();
+            let mut todo = vec![o.ty.as_str(), OBJECT_TYPE];
+            while let Some(t) = todo.pop() {
+                if set.insert(t.to_string())
+                    && let Some(ps) = parents.get(t)
+                {
+                    todo.extend(ps.iter().copied());
+                }
+            }
+        }
+        let mut objects_of: HashMap<String, Vec<String>> = HashMap::new();
+        let mut names: Vec<&String> = types.keys().collect();
+        names.sort();
+        for o in names {
+            for t in &types[o] {
+                objects_of.entry(t.clone()).or_default().push(o.clone());
+            }
+        }
+        World {
+            domain,
+            types,
+            objects_of,
+        }
+    }
+
+    fn is_of(&self, o: &str, ty: &str) -> bool {
+        self.types.get(o).is_some_and(|ts| ts.contains(ty))
+    }
+
+    fn objects(&self, ty: &str) -> &[String] {
+        self.objects_of.get(ty).map_or(&[], Vec::as_slice)
+    }
+
+    fn term<'e>(&self, t: &'e Term, env: &'e Env) -> Option<&'e str> {
+        match t {
+            Term::Const(c) => Some(c),
+            Term::Var(v) => env.get(v).map(String::as_str),
+        }
+    }
+
+    fn ground(&self, head: &str, args: &[Term], env: &Env) -> Option<Key> {
+        let mut k = vec![head.to_string()];
+        for a in args {
+            k.push(self.term(a, env)?.to_string());
+        }
+        Some(k)
+    }
+
+    fn num(&self, st: &St, e: &NumExpr, env: &Env) -> Option<f64> {
+        Some(match e {
+            NumExpr::Number(x) => *x,
+            NumExpr::Fluent(f) => *st.values.get(&self.ground(&f.function, &f.args, env)?)?,
+            NumExpr::Binary(op, a, b) => {
+                let (a, b) = (self.num(st, a, env)?, self.num(st, b, env)?);
+                match op {
+                    ArithOp::Add => a + b,
+                    ArithOp::Sub => a - b,
+                    ArithOp::Mul => a * b,
+                    ArithOp::Div => {
+                        if b == 0.0 {
+                            return None;
+                        }
+                        a / b
+                    }
+                }
+            }
+            NumExpr::Neg(a) => -self.num(st, a, env)?,
+        })
+    }
+
+    /// Whether `f` holds; variables not in `env` are unbound (an error of the model: false).
+    fn holds(&self, st: &St, f: &Formula, env: &mut Env) -> bool {
+        match f {
+            Formula::True => true,
+            Formula::Atom(a) => self
+                .ground(&a.predicate, &a.args, env)
+                .is_some_and(|k| st.facts.contains(&k)),
+            Formula::Equal(a, b, _) => match (self.term(a, env), self.term(b, env)) {
+                (Some(x), Some(y)) => x == y,
+                _ => false,
+            },
+            Formula::Not(x) => !self.holds(st, x, env),
+            Formula::And(xs) => xs.iter().all(|x| self.holds(st, x, env)),
+            Formula::Or(xs) => xs.iter().any(|x| self.holds(st, x, env)),
+            Formula::Imply(a, b) => !self.holds(st, a, env) || self.holds(st, b, env),
+            Formula::Exists(vars, body) => self.quantify(st, vars, body, env, true),
+            Formula::Forall(vars, body) => !self.quantify_not(st, vars, body, env),
+            Formula::Compare(op, a, b, _) => match (self.num(st, a, env), self.num(st, b, env)) {
+                (Some(x), Some(y)) => match op {
+                    CompareOp::Lt => x < y,
+                    CompareOp::Le => x <= y,
+                    CompareOp::Eq => x == y,
+                    CompareOp::Ge => x >= y,
+                    CompareOp::Gt => x > y,
+                },
+                _ => false,
+            },
+            // Geometric truth is not checked here: the plan's geometric solution attests it.
+            Formula::Evaluable { .. } => true,
+        }
+    }
+
+    /// Whether some binding of `vars` makes `body` hold.
+    fn quantify(
+        &self,
+        st: &St,
+        vars: &[TypedName],
+        body: &Formula,
+        env: &mut Env,
+        want: bool,
+    ) -> bool {
+        let Some((v, rest)) = vars.split_first() else {
+            return self.holds(st, body, env) == want;
+        };
+        let saved = env.get(&v.name).cloned();
+        let mut found = false;
+        for o in self.objects(&v.ty) {
+            env.insert(v.name.clone(), o.clone());
+            if self.quantify(st, rest, body, env, want) {
+                found = true;
+                break;
+            }
+        }
+        match saved {
+            Some(s) => env.insert(v.name.clone(), s),
+            None => env.remove(&v.name),
+        };
+        found
+    }
+
+    /// Whether some binding of `vars` makes `body` false.
+    fn quantify_not(&self, st: &St, vars: &[TypedName], body: &Formula, env: &mut Env) -> bool {
+        self.quantify(st, vars, body, env, false)
+    }
+
+    fn method_pre_holds(&self, st: &St, m: &Method, env: &Env) -> bool {
+        let free: Vec<TypedName> = m
+            .params
+            .iter()
+            .filter(|p| !env.contains_key(&p.name))
+            .cloned()
+            .collect();
+        let body = Formula::And(vec![m.precondition.clone(), m.constraints.clone()]);
+        let mut env = env.clone();
+        self.quantify(st, &free, &body, &mut env, true)
+    }
+
+    fn execute(&self, st: &mut St, a: &crate::plan::PlanAction) -> Result<(), String> {
+        let Some(act) = self.domain.actions.iter().find(|x| x.name == a.name) else {
+            return Err("not an action of the domain".into());
+        };
+        if act.params.len() != a.args.len() {
+            return Err(format!(
+                "has {} arguments, the domain declares {}",
+                a.args.len(),
+                act.params.len()
+            ));
+        }
+        let mut env = Env::new();
+        for (p, x) in act.params.iter().zip(&a.args) {
+            if !self.is_of(x, &p.ty) {
+                return Err(format!("`{x}` is not an object of type `{}`", p.ty));
+            }
+            env.insert(p.name.clone(), x.clone());
+        }
+        if !self.holds(st, &act.precondition, &mut env) {
+            return Err("its precondition does not hold".into());
+        }
+        let gs = has_evaluable(&act.precondition);
+        if gs && a.geometric.is_none() {
+            return Err(
+                "a GS action without its geometric solution (the competition format does not carry shared literals; check the JSON plan)".into(),
+            );
+        }
+        let mut adds = Vec::new();
+        let mut dels = Vec::new();
+        let mut values = Vec::new();
+        self.effects(
+            st,
+            &act.effects,
+            &mut env,
+            &mut adds,
+            &mut dels,
+            &mut values,
+        )?;
+        for (k, v) in values {
+            st.values.insert(k, v);
+        }
+        for k in &dels {
+            st.facts.remove(k);
+        }
+        for k in adds {
+            st.facts.insert(k);
+        }
+        if let Some(g) = &a.geometric {
+            for x in &g.delete {
+                st.facts.remove(&key(&x.predicate, &x.args));
+            }
+            for x in &g.add {
+                st.facts.insert(key(&x.predicate, &x.args));
+            }
+        }
+        Ok(())
+    }
+
+    fn effects(
+        &self,
+        st: &St,
+        effs: &[Effect],
+        env: &mut Env,
+        adds: &mut Vec<Key>,
+        dels: &mut Vec<Key>,
+        values: &mut Vec<(Key, f64)>,
+    ) -> Result<(), String> {
+        for e in effs {
+            match e {
+                Effect::Add(x) => adds.extend(self.ground(&x.predicate, &x.args, env)),
+                Effect::Delete(x) => dels.extend(self.ground(&x.predicate, &x.args, env)),
+                Effect::Forall(vars, inner) => {
+                    self.forall_effects(st, vars, inner, env, adds, dels, values)?
+                }
+                Effect::When(c, inner) => {
+                    if self.holds(st, c, env) {
+                        self.effects(st, inner, env, adds, dels, values)?;
+                    }
+                }
+                Effect::Numeric(op, f, e) => {
+                    let k = self
+                        .ground(&f.function, &f.args, env)
+                        .ok_or("an effect on an unbound fluent")?;
+                    let x = self.num(st, e, env).ok_or_else(|| {
+                        format!(
+                            "effect on ({}): the value reads an undefined fluent",
+                            k.join(" ")
+                        )
+                    })?;
+                    let cur = st.values.get(&k).copied();
+                    let v = match (op, cur) {
+                        (NumericEffectOp::Assign, _) => x,
+                        (_, None) => {
+                            return Err(format!("effect on undefined fluent ({})", k.join(" ")));
+                        }
+                        (NumericEffectOp::Increase, Some(c)) => c + x,
+                        (NumericEffectOp::Decrease, Some(c)) => c - x,
+                        (NumericEffectOp::ScaleUp, Some(c)) => c * x,
+                        (NumericEffectOp::ScaleDown, Some(c)) => {
+                            if x == 0.0 {
+                                return Err("scale-down by zero".into());
+                            }
+                            c / x
+                        }
+                    };
+                    values.push((k, v));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn forall_effects(
+        &self,
+        st: &St,
+        vars: &[TypedName],
+        inner: &[Effect],
+        env: &mut Env,
+        adds: &mut Vec<Key>,
+        dels: &mut Vec<Key>,
+        values: &mut Vec<(Key, f64)>,
+    ) -> Result<(), String> {
+        let Some((v, rest)) = vars.split_first() else {
+            return self.effects(st, inner, env, adds, dels, values);
+        };
+        for o in self.objects(&v.ty) {
+            env.insert(v.name.clone(), o.clone());
+            self.forall_effects(st, rest, inner, env, adds, dels, values)?;
+        }
+        env.remove(&v.name);
+        Ok(())
+    }
+}
+
+fn has_evaluable(f: &Formula) -> bool {
+    match f {
+        Formula::Evaluable { .. } => true,
+        Formula::And(xs) => xs.iter().any(has_evaluable),
+        _ => false,
+    }
+}
