@@ -40,6 +40,10 @@ enum Command {
     Validate(cmd::validate::Args),
     /// Run every problem under a benchmark directory and report coverage.
     BenchHddl(cmd::bench_hddl::Args),
+    /// Draw a scene as a PNG picture, from an agent's eyes or from above.
+    Render(cmd::render::Args),
+    /// Serve the 3D web viewer and a plan JSON on 127.0.0.1, and print the URL to open.
+    View(cmd::view::Args),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +59,8 @@ fn main() -> ExitCode {
         Command::Plan(args) => cmd::plan::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::BenchHddl(args) => cmd::bench_hddl::run(args),
+        Command::Render(args) => cmd::render::run(args),
+        Command::View(args) => cmd::view::run(args),
     };
     match result {
         Ok(code) => ExitCode::from(code),

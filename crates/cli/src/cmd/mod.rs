@@ -2,4 +2,6 @@
 
 pub mod bench_hddl;
 pub mod plan;
+pub mod render;
 pub mod validate;
+pub mod view;

@@ -1,0 +1,157 @@
+//! Visibility by pixels, as in the paper: the fraction of an object's pixels an eye sees.
+//!
+//! The original planner rendered the target alone (the *ideal* pixel count), then the whole scene
+//! from the same eye, and counted the target's pixels still showing: visibility = shown / ideal.
+//! Here the "pixels" are a `resolution` x `resolution` grid of rays spread over the target's
+//! projected bounding rectangle, seen from the eye with the camera aimed at the target, so every
+//! query spends its rays on the target whatever its distance (equal steps in the image plane,
+//! like pixels of a zoomed-in render). A ray counts as:
+//!
+//! * *ideal* when it hits the target alone;
+//! * *shown* when, in addition, its direction lies inside the agent's field of view (measured
+//!   in the eye frame actually used: the current head pose, or the head aimed at the target as the
+//!   joint limits allow) and no other body (objects, agents, including the viewer's own arms) cuts
+//!   it before the target.
+//!
+//! So an object fully in view and unoccluded scores 1, one outside the field of view 0, one half
+//! hidden about 0.5. Only the target and the bodies whose bounds meet the eye-to-target region
+//! are tested; nothing else of the scene is touched.
+
+use parry3d::bounding_volume::BoundingVolume;
+use parry3d::math::{Pose, Vector};
+use parry3d::query::{Ray, RayCast};
+
+use crate::effort::aim_head;
+use crate::render::look_rotation;
+use crate::scene::{AgentId, ObjectId};
+use crate::world::{BodyOwner, World};
+
+/// Default grid: 64 x 64 rays over the target.
+pub const DEFAULT_RESOLUTION: usize = 64;
+
+/// Result of one pixel-visibility query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Visibility {
+    /// Rays that hit the target and were seen.
+    pub shown: u32,
+    /// Rays that hit the target alone.
+    pub ideal: u32,
+}
+
+impl Visibility {
+    /// shown / ideal (0 when the target covers no pixel at all).
+    pub fn fraction(&self) -> f32 {
+        if self.ideal == 0 {
+            0.0
+        } else {
+            self.shown as f32 / self.ideal as f32
+        }
+    }
+}
+
+/// How the agent's head is set for a query.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Aim {
+    /// The head as it is now (effort level 0).
+    Current,
+    /// The head turned towards the target within its joint limits (effort level 1 and above).
+    AtTarget,
+}
+
+/// Visibility of `target` from an eye frame `eye` (x forward) with field of view `fov`
+/// (horizontal, vertical; radians), on a `resolution` x `resolution` grid.
+pub fn visibility_from(
+    world: &World,
+    target: ObjectId,
+    eye: &Pose,
+    fov: [f32; 2],
+    resolution: usize,
+) -> Visibility {
+    let res = resolution.max(1);
+    let obj = world.object(target);
+    let tpose = world.object_shape_pose(target);
+    let e = eye.translation;
+
+    // Aim a camera at the centre of the target's world bounds; project the corners of its
+    // oriented local box to bound the rays.
+    let taabb = obj.shape.compute_aabb(&tpose);
+    let centre = taabb.center();
+    let rot = look_rotation(centre - e);
+    let lb = obj.shape.compute_local_aabb();
+    let (mut a0, mut a1, mut b0, mut b1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    for k in 0..8 {
+        let c = Vector::new(
+            if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
+            if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
+            if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
+        );
+        let l = rot.inverse() * (tpose.transform_point(c) - e);
+        // A corner at or behind the eye: the eye is (nearly) inside the target's bounds.
+        let x = l.x.max(1e-3);
+        let (a, b) = ((l.y / x).clamp(-6.0, 6.0), (l.z / x).clamp(-6.0, 6.0));
+        a0 = a0.min(a);
+        a1 = a1.max(a);
+        b0 = b0.min(b);
+        b1 = b1.max(b);
+    }
+
+    // Possible occluders: bodies whose bounds meet the region spanned by the eye and the
+    // target, except the target itself and any body the eye is inside of.
+    let mut region = taabb;
+    region.take_point(e);
+    let bodies = world.bodies();
+    let occluders: Vec<_> = bodies
+        .iter()
+        .filter(|b| b.owner != BodyOwner::Object(target))
+        .map(|b| (b, b.shape.compute_aabb(&b.pose)))
+        .filter(|(b, bb)| bb.intersects(&region) && !b.shape.contains_point(&b.pose, e))
+        .collect();
+
+    let inv_eye = eye.rotation.inverse();
+    let (tx, ty) = ((0.5 * fov[0]).tan(), (0.5 * fov[1]).tan());
+    let mut vis = Visibility { shown: 0, ideal: 0 };
+    for j in 0..res {
+        let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
+        for i in 0..res {
+            let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
+            let dir = rot * Vector::new(1.0, a, b);
+            let ray = Ray::new(e, dir);
+            let Some(toi) = obj.shape.cast_ray(&tpose, &ray, f32::MAX, true) else {
+                continue;
+            };
+            vis.ideal += 1;
+            let d = inv_eye * dir;
+            if d.x <= 0.0 || (d.y / d.x).abs() > tx || (d.z / d.x).abs() > ty {
+                continue;
+            }
+            let blocked = occluders.iter().any(|(b, bb)| {
+                bb.intersects_local_ray(&ray, toi) && b.shape.intersects_ray(&b.pose, &ray, toi)
+            });
+            if !blocked {
+                vis.shown += 1;
+            }
+        }
+    }
+    vis
+}
+
+/// Visibility of `target` for an agent as it stands now, with the head as it is ([`Aim::Current`])
+/// or turned towards the target ([`Aim::AtTarget`]).
+pub fn visibility_for_agent(
+    world: &World,
+    agent: AgentId,
+    target: ObjectId,
+    aim: Aim,
+    resolution: usize,
+) -> Visibility {
+    let st = world.agent_state(agent);
+    let eye = match aim {
+        Aim::Current => world.eye_pose(agent),
+        Aim::AtTarget => {
+            let mut q = st.q.clone();
+            let centre = world.object_aabb(target).center();
+            aim_head(world, agent, st.base, &mut q, centre)
+        }
+    };
+    visibility_from(world, target, &eye, world.agent(agent).fov, resolution)
+}

@@ -1,0 +1,462 @@
+//! The geometric world state: a loaded [`Scene`] plus where everything is now.
+//!
+//! A [`World`] is what the geometric task planner copies, mutates and throws away while it
+//! searches: the immutable parts (shapes, names, agent models) sit behind one `Arc`, so a clone
+//! copies only the object poses, attachments and agent configurations. Mutations: move an
+//! object ([`World::set_object_pose`]), attach an object to a link of an agent (a grasp: it
+//! then follows that link, [`World::attach`]) and release it ([`World::detach`]), set an
+//! agent's base pose or joint values ([`World::set_agent_config`]).
+//!
+//! Everything solid in the world is a [`Body`]: an object, or one collision shape of an agent's
+//! link posed by forward kinematics. The renderer, pixel visibility and the mightability maps
+//! all work on bodies; the collision checker uses [`World::obstacles`] for the static part.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::shape::SharedShape;
+
+use crate::agent::AgentModel;
+use crate::effort::EffortParams;
+use crate::scene::{
+    AgentId, AgentKind, AgentSpecResolved, ObjectId, ObjectModel, Scene, SceneError,
+};
+
+/// An agent of the scene with its kinematic model and the frames the world needs.
+#[derive(Clone, Debug)]
+pub struct AgentInfo {
+    /// What the scene file says.
+    pub spec: AgentSpecResolved,
+    /// Kinematics and collision shapes (from the URDF).
+    pub model: Arc<AgentModel>,
+    /// Link whose frame is the eye (x forward, y left, z up).
+    pub eye_link: usize,
+    /// Shoulder links (reach is measured from their origins).
+    pub shoulder_links: Vec<usize>,
+    /// Hand / tool frames (objects are attached to these).
+    pub hand_links: Vec<usize>,
+    /// Horizontal and vertical field of view, radians.
+    pub fov: [f32; 2],
+    /// Arm reach from a shoulder, metres.
+    pub reach: f32,
+    /// What each effort level allows this agent to do.
+    pub effort: EffortParams,
+}
+
+impl AgentInfo {
+    /// Name of the agent.
+    pub fn name(&self) -> &str {
+        &self.spec.name
+    }
+    /// Robot or human.
+    pub fn kind(&self) -> AgentKind {
+        self.spec.kind
+    }
+}
+
+/// The shared, immutable part of every world made from one scene.
+#[derive(Debug)]
+pub struct WorldModel {
+    pub scene: Scene,
+    pub agents: Vec<AgentInfo>,
+}
+
+/// An object held by an agent: it follows `link` with a fixed relative pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attachment {
+    pub agent: AgentId,
+    pub link: usize,
+    /// Pose of the object in the link frame.
+    pub grasp: Pose,
+}
+
+/// Where an agent is and how its joints are set, with its link poses cached.
+#[derive(Clone, Debug)]
+pub struct AgentState {
+    /// Base (root link) pose in the world.
+    pub base: Pose,
+    /// Joint values in the model's degree-of-freedom order.
+    pub q: Vec<f32>,
+    link_poses: Vec<Pose>,
+}
+
+impl AgentState {
+    /// World pose of every link (forward kinematics of `base` and `q`).
+    pub fn link_poses(&self) -> &[Pose] {
+        &self.link_poses
+    }
+}
+
+/// Who a body belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BodyOwner {
+    Object(ObjectId),
+    /// An agent's link (the link index in its model).
+    Agent(AgentId, usize),
+}
+
+/// One solid shape placed in the world.
+#[derive(Clone)]
+pub struct Body<'a> {
+    pub owner: BodyOwner,
+    pub shape: &'a SharedShape,
+    /// World pose of the shape.
+    pub pose: Pose,
+    pub colour: [u8; 3],
+}
+
+/// The world state. Cheap to clone (see the module docs).
+#[derive(Clone, Debug)]
+pub struct World {
+    model: Arc<WorldModel>,
+    poses: Vec<Pose>,
+    attachments: Vec<Option<Attachment>>,
+    agents: Vec<AgentState>,
+}
+
+/// Base pose on the floor from x, y and yaw (radians).
+pub fn base_pose(x: f32, y: f32, yaw: f32) -> Pose {
+    Pose::from_parts(Vector::new(x, y, 0.0), Rotation::from_rotation_z(yaw))
+}
+
+fn find_link(model: &AgentModel, names: &[&str]) -> Option<usize> {
+    names.iter().find_map(|n| model.link_id(n).ok())
+}
+
+impl World {
+    /// Loads a scene file and its agents' URDF models.
+    pub fn load(path: impl AsRef<Path>) -> Result<World, SceneError> {
+        World::from_scene(Scene::load(path)?)
+    }
+
+    /// Builds the initial world of a loaded scene: loads each agent's URDF, checks the joint and
+    /// link names the scene uses, and applies the scene's posture.
+    pub fn from_scene(scene: Scene) -> Result<World, SceneError> {
+        let mut infos = Vec::with_capacity(scene.agents.len());
+        let mut states = Vec::with_capacity(scene.agents.len());
+        for (i, spec) in scene.agents.iter().enumerate() {
+            let at = format!("agents[{i}]");
+            let model = AgentModel::from_urdf_file(&spec.urdf)
+                .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            let mut q = model.default_configuration().into_vec();
+            for (name, v) in &spec.joints {
+                let k = model.dof_index(name).map_err(|_| {
+                    scene.error(
+                        &format!("{at}.joints.{name}"),
+                        format!(
+                            "unknown joint `{name}` (movable joints of {}: {})",
+                            spec.urdf.display(),
+                            model.dof_names().join(", ")
+                        ),
+                    )
+                })?;
+                let lim = model.dof_limits()[k];
+                if !lim.contains(*v) {
+                    return Err(scene.error(
+                        &format!("{at}.joints.{name}"),
+                        format!(
+                            "{v} is outside the joint limits {} ..= {}",
+                            lim.lower, lim.upper
+                        ),
+                    ));
+                }
+                q[k] = *v;
+            }
+            let link = |key: &str, name: &str| {
+                model.link_id(name).map_err(|_| {
+                    scene.error(
+                        &format!("{at}.{key}"),
+                        format!("no link `{name}` in {}", spec.urdf.display()),
+                    )
+                })
+            };
+            let human = spec.kind == AgentKind::Human;
+            let eye_link = match &spec.eye {
+                Some(n) => link("eye", n)?,
+                None => find_link(
+                    &model,
+                    &["head_camera", "eye", "head_camera_link", "head_tilt_link"],
+                )
+                .ok_or_else(|| {
+                    scene.error(&at, "no eye link found (name it with `eye = \"LINK\"`)")
+                })?,
+            };
+            let links_or =
+                |key: &str, given: &Option<Vec<String>>, defaults: &[&[&str]]| match given {
+                    Some(list) => list
+                        .iter()
+                        .map(|n| link(key, n))
+                        .collect::<Result<Vec<_>, _>>(),
+                    None => {
+                        let found: Vec<usize> = defaults
+                            .iter()
+                            .filter_map(|alts| find_link(&model, alts))
+                            .collect();
+                        if found.is_empty() {
+                            Err(scene.error(
+                                &at,
+                                format!("no {key} links found (name them with `{key} = [..]`)"),
+                            ))
+                        } else {
+                            Ok(found)
+                        }
+                    }
+                };
+            let shoulder_links = links_or(
+                "shoulders",
+                &spec.shoulders,
+                &[
+                    &[
+                        "r_shoulder_pan_link",
+                        "r_shoulder_pitch_link",
+                        "r_shoulder_link",
+                        "right_shoulder",
+                    ],
+                    &[
+                        "l_shoulder_pan_link",
+                        "l_shoulder_pitch_link",
+                        "l_shoulder_link",
+                        "left_shoulder",
+                    ],
+                ],
+            )?;
+            let hand_links = links_or(
+                "hands",
+                &spec.hands,
+                &[
+                    &["r_gripper_tool_frame", "r_hand", "right_hand"],
+                    &["l_gripper_tool_frame", "l_hand", "left_hand"],
+                ],
+            )?;
+            let fov = spec.fov.unwrap_or(if human {
+                // Attention field of a person (facts: 120 deg, vertical 0.75 of it).
+                [120f32.to_radians(), 90f32.to_radians()]
+            } else {
+                // A head camera of the PR2's kind.
+                [70f32.to_radians(), 52.5f32.to_radians()]
+            });
+            let reach = spec.reach.unwrap_or(if human { 0.70 } else { 0.95 });
+            let effort = EffortParams::for_agent(spec, &model);
+            let base = base_pose(spec.base[0], spec.base[1], spec.base[2]);
+            let link_poses = model.link_poses(base, &q);
+            states.push(AgentState {
+                base,
+                q,
+                link_poses,
+            });
+            infos.push(AgentInfo {
+                spec: spec.clone(),
+                model: Arc::new(model),
+                eye_link,
+                shoulder_links,
+                hand_links,
+                fov,
+                reach,
+                effort,
+            });
+        }
+        let poses = scene.initial_poses.clone();
+        let n = poses.len();
+        Ok(World {
+            model: Arc::new(WorldModel {
+                scene,
+                agents: infos,
+            }),
+            poses,
+            attachments: vec![None; n],
+            agents: states,
+        })
+    }
+
+    /// The scene this world was made from.
+    pub fn scene(&self) -> &Scene {
+        &self.model.scene
+    }
+
+    /// The shared immutable part (for checking that two worlds come from the same scene:
+    /// `Arc::ptr_eq`).
+    pub fn model(&self) -> &Arc<WorldModel> {
+        &self.model
+    }
+
+    // ---- objects -------------------------------------------------------------------------
+
+    /// Number of objects.
+    pub fn object_count(&self) -> usize {
+        self.poses.len()
+    }
+
+    /// All object ids, in scene order.
+    pub fn object_ids(&self) -> impl Iterator<Item = ObjectId> + '_ {
+        (0..self.poses.len()).map(ObjectId)
+    }
+
+    /// The object called `name`.
+    pub fn object_id(&self, name: &str) -> Option<ObjectId> {
+        self.model.scene.object_id(name)
+    }
+
+    /// Immutable description of an object.
+    pub fn object(&self, id: ObjectId) -> &ObjectModel {
+        &self.model.scene.objects[id.0]
+    }
+
+    /// Current pose of the object's frame.
+    pub fn object_pose(&self, id: ObjectId) -> Pose {
+        self.poses[id.0]
+    }
+
+    /// Current world pose of the object's shape (`object_pose * shape_offset`).
+    pub fn object_shape_pose(&self, id: ObjectId) -> Pose {
+        self.poses[id.0] * self.object(id).shape_offset
+    }
+
+    /// Current world bounding box of the object.
+    pub fn object_aabb(&self, id: ObjectId) -> Aabb {
+        let o = self.object(id);
+        o.shape.compute_aabb(&self.object_shape_pose(id))
+    }
+
+    /// Moves an object. If it is attached, it is released first.
+    pub fn set_object_pose(&mut self, id: ObjectId, pose: Pose) {
+        self.attachments[id.0] = None;
+        self.poses[id.0] = pose;
+    }
+
+    /// Attaches an object to a link of an agent at its current relative pose (a grasp already
+    /// made: the object then follows the link when the agent moves).
+    pub fn attach(&mut self, id: ObjectId, agent: AgentId, link: usize) {
+        let link_pose = self.agents[agent.0].link_poses[link];
+        let grasp = link_pose.inv_mul(&self.poses[id.0]);
+        self.attachments[id.0] = Some(Attachment { agent, link, grasp });
+    }
+
+    /// Attaches an object to a link with a given grasp (object pose in the link frame) and
+    /// moves the object there.
+    pub fn attach_with_grasp(&mut self, id: ObjectId, agent: AgentId, link: usize, grasp: Pose) {
+        self.poses[id.0] = self.agents[agent.0].link_poses[link] * grasp;
+        self.attachments[id.0] = Some(Attachment { agent, link, grasp });
+    }
+
+    /// Releases an attached object where it is.
+    pub fn detach(&mut self, id: ObjectId) {
+        self.attachments[id.0] = None;
+    }
+
+    /// The attachment of an object, if it is held.
+    pub fn attachment(&self, id: ObjectId) -> Option<Attachment> {
+        self.attachments[id.0]
+    }
+
+    // ---- agents --------------------------------------------------------------------------
+
+    /// Number of agents.
+    pub fn agent_count(&self) -> usize {
+        self.agents.len()
+    }
+
+    /// All agent ids.
+    pub fn agent_ids(&self) -> impl Iterator<Item = AgentId> + '_ {
+        (0..self.agents.len()).map(AgentId)
+    }
+
+    /// The agent called `name`.
+    pub fn agent_id(&self, name: &str) -> Option<AgentId> {
+        self.model.scene.agent_id(name)
+    }
+
+    /// Model and parameters of an agent.
+    pub fn agent(&self, id: AgentId) -> &AgentInfo {
+        &self.model.agents[id.0]
+    }
+
+    /// Current base pose, joint values and link poses of an agent.
+    pub fn agent_state(&self, id: AgentId) -> &AgentState {
+        &self.agents[id.0]
+    }
+
+    /// Sets an agent's base pose and joint values (model order) and moves what it holds.
+    /// Values are used as given (the caller keeps them within limits).
+    pub fn set_agent_config(&mut self, id: AgentId, base: Pose, q: &[f32]) {
+        let info = &self.model.agents[id.0];
+        let st = &mut self.agents[id.0];
+        st.base = base;
+        st.q.clear();
+        st.q.extend_from_slice(q);
+        info.model.link_poses_into(base, q, &mut st.link_poses);
+        for (k, a) in self.attachments.iter().enumerate() {
+            if let Some(a) = a
+                && a.agent == id
+            {
+                self.poses[k] = self.agents[id.0].link_poses[a.link] * a.grasp;
+            }
+        }
+    }
+
+    /// Sets one joint by name.
+    pub fn set_joint(&mut self, id: AgentId, joint: &str, value: f32) -> Result<(), String> {
+        let k = self.model.agents[id.0]
+            .model
+            .dof_index(joint)
+            .map_err(|e| e.to_string())?;
+        let mut q = self.agents[id.0].q.clone();
+        q[k] = value;
+        let base = self.agents[id.0].base;
+        self.set_agent_config(id, base, &q);
+        Ok(())
+    }
+
+    /// World pose of an agent's eye frame (x forward, y left, z up).
+    pub fn eye_pose(&self, id: AgentId) -> Pose {
+        self.agents[id.0].link_poses[self.agent(id).eye_link]
+    }
+
+    // ---- bodies --------------------------------------------------------------------------
+
+    /// Every solid thing: objects (in scene order) then every collision shape of every agent.
+    pub fn bodies(&self) -> Vec<Body<'_>> {
+        let mut out: Vec<Body<'_>> = self
+            .object_ids()
+            .map(|id| Body {
+                owner: BodyOwner::Object(id),
+                shape: &self.object(id).shape,
+                pose: self.object_shape_pose(id),
+                colour: self.object(id).colour,
+            })
+            .collect();
+        for a in self.agent_ids() {
+            let info = self.agent(a);
+            let poses = &self.agents[a.0].link_poses;
+            for (li, link) in info.model.links().iter().enumerate() {
+                for c in &link.collisions {
+                    out.push(Body {
+                        owner: BodyOwner::Agent(a, li),
+                        shape: &c.shape,
+                        pose: poses[li] * c.local_pose,
+                        colour: info.spec.colour,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// The obstacles for an agent's collision checks: every object not attached to an agent,
+    /// as `(id, shape, world pose)`.
+    pub fn obstacles(&self) -> impl Iterator<Item = (ObjectId, &SharedShape, Pose)> + '_ {
+        self.object_ids()
+            .filter(|id| self.attachments[id.0].is_none())
+            .map(|id| (id, &self.object(id).shape, self.object_shape_pose(id)))
+    }
+
+    /// Bounding box of everything (objects and agents).
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb::new_invalid();
+        for body in self.bodies() {
+            b.merge(&body.shape.compute_aabb(&body.pose));
+        }
+        b
+    }
+}
