@@ -11,7 +11,7 @@ use htn::parser::{domain_file_for, is_domain_file_name, load_domain, load_proble
 fn benchmarks() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/benchmarks");
     if dir.is_dir() {
-        Some(dir)
+        Some(dir.canonicalize().unwrap_or(dir))
     } else {
         eprintln!(
             "SKIPPED: benchmark folder {} is absent; the benchmark parsing tests checked nothing",
@@ -51,6 +51,7 @@ fn parse_folder(dir: &Path) -> (usize, usize) {
     assert!(!files.is_empty(), "no .hddl files under {}", dir.display());
     let mut failures = Vec::new();
     let (mut domains, mut problems) = (0, 0);
+    let mut slowest: Option<(std::time::Duration, PathBuf)> = None;
     for f in &files {
         if is_domain_file_name(f) {
             domains += 1;
@@ -66,8 +67,13 @@ fn parse_folder(dir: &Path) -> (usize, usize) {
         };
         match load_domain(&dfile) {
             Ok(d) => {
+                let start = Instant::now();
                 if let Err(e) = load_problem(f, &d) {
                     failures.push(e.to_string());
+                }
+                let took = start.elapsed();
+                if slowest.as_ref().is_none_or(|(t, _)| took > *t) {
+                    slowest = Some((took, f.clone()));
                 }
             }
             Err(e) => failures.push(e.to_string()),
@@ -80,6 +86,14 @@ fn parse_folder(dir: &Path) -> (usize, usize) {
         files.len(),
         failures.join("\n")
     );
+    // For information only (timings are not asserted in tests).
+    if let Some((t, f)) = slowest {
+        let size = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+        eprintln!(
+            "slowest problem: {} ({size} bytes) read and parsed in {t:?}",
+            f.display()
+        );
+    }
     (domains, problems)
 }
 

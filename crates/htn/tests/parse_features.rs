@@ -341,3 +341,52 @@ fn the_library_domains_and_problems_parse() {
     }
     assert!(problems >= 1);
 }
+
+#[test]
+fn deep_but_legal_nesting_parses_and_deeper_is_refused() {
+    // 240 nested `not` inside an action inside the define: 243 levels, under the limit.
+    let depth = 240;
+    let body = format!("{}(p){}", "(not ".repeat(depth), ")".repeat(depth));
+    let text = format!("(define (domain n) (:predicates (p)) (:action a :precondition {body}))");
+    let d = domain(&text);
+    let mut f = &d.actions[0].precondition;
+    let mut nots = 0;
+    while let Formula::Not(inner) = f {
+        nots += 1;
+        f = inner;
+    }
+    assert_eq!(nots, depth);
+
+    let depth = htn::parser::MAX_DEPTH;
+    let body = format!("{}(p){}", "(not ".repeat(depth), ")".repeat(depth));
+    let text = format!("(define (domain n) (:predicates (p)) (:action a :precondition {body}))");
+    let e = parse_domain(&text, src("d.hddl")).unwrap_err();
+    assert!(e.message.contains("nested deeper"), "{e}");
+}
+
+#[test]
+fn empty_text_and_files_that_are_not_utf8_or_missing() {
+    let e = parse_domain("", src("d.hddl")).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "d.hddl:1:1: empty file: expected `(define (domain NAME) ...)`"
+    );
+
+    let dir = std::env::temp_dir().join(format!("htn-parse-features-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("latin1.hddl");
+    std::fs::write(&bad, b"(define (domain d)\n  (:predicates (caf\xe9)))").unwrap();
+    let e = load_domain(&bad).unwrap_err();
+    assert_eq!((e.line, e.col), (2, 20));
+    assert!(e.message.contains("not valid UTF-8"), "{e}");
+
+    let missing = dir.join("missing.hddl");
+    let e = load_domain(&missing).unwrap_err();
+    assert_eq!(e.line, 0);
+    assert!(
+        e.to_string()
+            .starts_with(&format!("{}: cannot read the file", missing.display())),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

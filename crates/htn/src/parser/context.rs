@@ -228,6 +228,7 @@ impl<'a> Ctx<'a> {
         let what = if vars { "a variable (`?x`)" } else { "a name" };
         let mut out: Vec<TypedName> = Vec::new();
         let mut pending = 0usize; // how many names at the end of `out` still lack a type
+        let mut seen: HashMap<&str, usize> = HashMap::new();
         let mut i = 0;
         while let Some(item) = items.get(i) {
             let text = self.atom(item, what)?;
@@ -270,7 +271,7 @@ impl<'a> Ctx<'a> {
                     format!("expected {what}, found `{}`", shorten(text)),
                 ));
             }
-            if let Some(prev) = out.iter().find(|t| t.name == text) {
+            if let Some(prev) = seen.get(text).and_then(|&i| out.get(i)) {
                 return Err(self.err(
                     item.span(),
                     format!(
@@ -281,6 +282,7 @@ impl<'a> Ctx<'a> {
                     ),
                 ));
             }
+            seen.insert(text, out.len());
             out.push(TypedName {
                 name: text.to_string(),
                 ty: OBJECT_TYPE.to_string(),
@@ -357,11 +359,11 @@ impl<'a> Ctx<'a> {
     }
 
     /// A term and its type: a variable in scope, or a declared constant / object.
-    pub fn term(&self, s: &Sexp, scope: &Scope) -> Result<(Term, String)> {
+    pub fn term<'s>(&'s self, s: &Sexp, scope: &'s Scope) -> Result<(Term, &'s str)> {
         let text = self.atom(s, "a variable or a constant")?;
         if text.starts_with('?') {
             match scope.lookup(text) {
-                Some(ty) => Ok((Term::Var(text.to_string()), ty.to_string())),
+                Some(ty) => Ok((Term::Var(text.to_string()), ty)),
                 None => Err(self.err(s.span(), format!("unbound variable `{}`", shorten(text)))),
             }
         } else if !is_name(text) {
@@ -374,7 +376,7 @@ impl<'a> Ctx<'a> {
             ))
         } else {
             match self.t.objects.get(text) {
-                Some(ty) => Ok((Term::Const(text.to_string()), ty.clone())),
+                Some(ty) => Ok((Term::Const(text.to_string()), ty.as_str())),
                 None => Err(self.err(
                     s.span(),
                     format!("undeclared {} `{}`", self.object_word, shorten(text)),
@@ -416,8 +418,8 @@ impl<'a> Ctx<'a> {
         for (arg, param) in args.iter().zip(&sig.params) {
             let (term, ty) = self.term(arg, scope)?;
             let fits = match term {
-                Term::Var(_) => self.t.types.compatible(&ty, &param.ty),
-                Term::Const(_) => self.t.types.is_subtype(&ty, &param.ty),
+                Term::Var(_) => self.t.types.compatible(ty, &param.ty),
+                Term::Const(_) => self.t.types.is_subtype(ty, &param.ty),
             };
             if !fits {
                 let shown = match &term {

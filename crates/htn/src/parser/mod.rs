@@ -11,7 +11,9 @@
 //! must have a type compatible with the parameter's, a constant or object a subtype of it),
 //! bound variables, duplicate declarations, a totally ordered task network without cycles,
 //! shared predicates kept out of `:init` and effects, and evaluable predicates only as
-//! conjuncts of an action's top-level precondition (at most one per action). The first
+//! conjuncts of an action's top-level precondition (at most one per action), and a problem
+//! whose `(:domain NAME)` is not the domain it is read with (an error, not a warning: its
+//! names would be checked against the wrong declarations). The first
 //! problem found is returned as a [`ParseError`]; no input makes the parser panic (nesting is
 //! limited to [`MAX_DEPTH`] levels, so no input can exhaust the stack either).
 

@@ -96,6 +96,9 @@ impl TypeTable {
 
     /// Whether every object of type `sub` is also of type `sup` (reflexive).
     pub fn is_subtype(&self, sub: &str, sup: &str) -> bool {
+        if sub == sup {
+            return self.contains(sub);
+        }
         match (self.index.get(sub), self.index.get(sup)) {
             (Some(&a), Some(&b)) => self.ancestors.get(a).is_some_and(|s| s.contains(&b)),
             _ => false,
