@@ -32,13 +32,6 @@ const BAD = {
     text: variant((p) => (p.steps[p.steps.length - 1].object_poses['blue-book'] = somePose)),
     says: [`steps[${PLAN.steps.length - 1}].object_poses.blue-book`, 'unknown object "blue-book"'],
   },
-  '/bad/unknown-link.json': {
-    text: variant((p) => {
-      const f = p.steps[firstGtpStep].gtp.trajectories[0].frames[0];
-      f.link_poses['tail_link'] = somePose;
-    }),
-    says: [`steps[${firstGtpStep}].gtp.trajectories[0].frames[0].link_poses.tail_link`, 'unknown link "tail_link"'],
-  },
   '/bad/missing-field.json': {
     text: variant((p) => delete p.scene.objects[0].shape),
     says: ['scene.objects[0].shape: missing'],
@@ -48,6 +41,16 @@ const BAD = {
     says: ['step 999 does not exist'],
   },
 };
+
+if (firstGtpStep >= 0) {
+  BAD['/bad/unknown-link.json'] = {
+    text: variant((p) => {
+      const f = p.steps[firstGtpStep].gtp.trajectories[0].frames[0];
+      f.link_poses['tail_link'] = somePose;
+    }),
+    says: [`steps[${firstGtpStep}].gtp.trajectories[0].frames[0].link_poses.tail_link`, 'unknown link "tail_link"'],
+  };
+}
 
 const extra = { '/plan.json': PLAN_TEXT };
 for (const [path, { text }] of Object.entries(BAD)) extra[path] = text;
