@@ -2,10 +2,27 @@
 # The viewer's browser tests in one command: installs what is missing (setup.sh), builds the page,
 # runs tests/*.test.mjs in headless Chromium, and ends with "N passed, N failed".
 # HTNGTP_PLAN=path/to/plan.json runs them on another plan (default: fixtures/sample-plan.json).
+# HTNGTP_BIN=path/to/htngtp also tests `htngtp view`; by default a built binary under the cargo
+# target directory is used when it has the `view` subcommand.
 set -euo pipefail
 cd "$(dirname "$0")"
 ./setup.sh
 npm run build --silent
+if [ -z "${HTNGTP_BIN:-}" ]; then
+  target="${CARGO_TARGET_DIR:-../target}"
+  for b in "$target/debug/htngtp" "$target/release/htngtp"; do
+    if [ -x "$b" ] && "$b" view --help >/dev/null 2>&1; then
+      HTNGTP_BIN="$(cd "$(dirname "$b")" && pwd)/htngtp"
+      break
+    fi
+  done
+fi
+if [ -n "${HTNGTP_BIN:-}" ]; then
+  export HTNGTP_BIN
+  echo "viewer tests: htngtp view from $HTNGTP_BIN"
+else
+  echo "viewer tests: no built htngtp with \`view\` found (cargo build -p htngtp, or set HTNGTP_BIN): its tests are skipped"
+fi
 tap="$(mktemp)"
 trap 'rm -f "$tap"' EXIT
 status=0
