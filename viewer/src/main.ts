@@ -270,6 +270,7 @@ class App {
     this.ui.clearPlan();
     this.ui.showError(e.source, e.problems);
     this.error = e.message;
+    this.fit();
     this.dirty = true;
   }
 

@@ -177,8 +177,9 @@ export class Ui {
   private treeNode(n: TreeNode, steps: Step[]): HTMLElement {
     if (n.action !== null) {
       const d = el('span', 'node action');
-      d.append(el('span', 'stepno', n.step === null ? '·' : String(n.step)), document.createTextNode(call(n.action, n.args)));
-      if (n.step !== null && steps[n.step]?.gtp) d.classList.add('gs');
+      d.append(el('span', 'stepno', n.step === null ? '·' : String(n.step)), el('span', 'txt', call(n.action, n.args)));
+      if (n.step !== null && steps[n.step]?.gtp) d.append(el('span', 'badge'));
+      d.title = call(n.action, n.args);
       if (n.step !== null) {
         const i = n.step;
         d.addEventListener('click', () => this.handlers.seekStep(i));
@@ -186,8 +187,10 @@ export class Ui {
       this.treeNodes.set(n.id, d);
       return d;
     }
-    const d = el('span', 'node task', call(n.task ?? '?', n.args));
+    const d = el('span', 'node task');
+    d.append(el('span', 'txt', call(n.task ?? '?', n.args)));
     if (n.method !== null) d.append(el('span', 'method', n.method));
+    d.title = `${call(n.task ?? '?', n.args)}${n.method !== null ? ` by method ${n.method}` : ''}`;
     this.treeNodes.set(n.id, d);
     return d;
   }
