@@ -137,3 +137,25 @@ fn the_hybrid_domain_in_other_is_refused_with_a_clear_error() {
     assert!(e.message.contains("hybrid"), "{e}");
     assert!(e.line > 0 && e.col > 0);
 }
+
+#[test]
+fn a_reversed_ordering_in_a_benchmark_is_followed() {
+    let Some(b) = benchmarks() else { return };
+    let dir = b.join("ipc2020-total-order/Logistics-Learned-ECAI-16");
+    let d = load_domain(dir.join("domain.hddl")).unwrap_or_else(|e| panic!("{e}"));
+    let p = load_problem(dir.join("probLOGISTICS-09-1.hddl"), &d).unwrap_or_else(|e| panic!("{e}"));
+    // The file lists task0..task8 and orders them `(< task8 task7) ... (< task1 task0)`.
+    let ids: Vec<&str> = p
+        .htn
+        .subtasks
+        .iter()
+        .map(|s| s.id.as_deref().unwrap())
+        .collect();
+    let expected: Vec<String> = (0..ids.len()).rev().map(|i| format!("task{i}")).collect();
+    assert_eq!(ids, expected);
+    assert!(ids.len() >= 2);
+    assert_eq!(
+        p.htn.subtasks[0].name, "achieve-at",
+        "names are lower-cased"
+    );
+}

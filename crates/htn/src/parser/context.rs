@@ -36,13 +36,8 @@ impl Tables {
     /// The tables of a domain whose declarations are filled in; `action_sigs` are the action
     /// signatures (the domain's actions may not be parsed yet).
     pub fn new(file: &SourceName, domain: &Domain, action_sigs: &[Signature]) -> Result<Tables> {
-        let types = TypeTable::new(&domain.types).map_err(|c| {
-            ParseError::new(
-                file,
-                c.span,
-                format!("type `{}` is its own ancestor (cycle in `:types`)", c.name),
-            )
-        })?;
+        let types = TypeTable::new(&domain.types)
+            .map_err(|c| ParseError::new(file, c.span, c.message()))?;
         let objects = domain
             .constants
             .iter()

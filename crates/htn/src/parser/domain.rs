@@ -351,15 +351,7 @@ fn type_decls(ctx: &Ctx, items: &[Sexp]) -> Result<Vec<TypeDecl>> {
         }
     }
     decls.extend(implicit);
-    TypeTable::new(&decls).map_err(|c| {
-        ctx.err(
-            c.span,
-            format!(
-                "type `{}` is its own ancestor (cycle in `:types`)",
-                shorten(&c.name)
-            ),
-        )
-    })?;
+    TypeTable::new(&decls).map_err(|c| ctx.err(c.span, c.message()))?;
     Ok(decls)
 }
 

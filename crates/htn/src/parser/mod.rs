@@ -35,7 +35,7 @@ pub use domain::parse_domain;
 pub use error::ParseError;
 pub use problem::parse_problem;
 pub use sexpr::MAX_DEPTH;
-pub use types::{TypeCycle, TypeTable};
+pub use types::{MAX_TYPES, TypeTable, TypeTableError};
 
 /// Reads and parses a domain file.
 pub fn load_domain(path: impl AsRef<Path>) -> Result<Domain, ParseError> {
