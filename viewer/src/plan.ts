@@ -21,7 +21,8 @@ export interface SceneObject {
   name: string;
   movable: boolean;
   color: Color | null;
-  shape: Shape;
+  /** The object's geometry in its frame: its `shape` (at identity) and its `parts`, if any. */
+  parts: LinkShape[];
   pose: Pose;
 }
 
@@ -143,6 +144,7 @@ function jsonErrorWhere(text: string, e: unknown): string {
 }
 
 const MAX_PROBLEMS = 20;
+const IDENTITY: Pose = { t: [0, 0, 0], q: [0, 0, 0, 1] };
 
 /** Checks a parsed document against the contract and the invariants of docs/plan-json.md. */
 export function validatePlan(doc: unknown, source: string): Plan {
@@ -302,6 +304,23 @@ class Validator {
     }
   }
 
+  /** A list of `{ shape, pose?, color? }`, poses in the owner's frame. */
+  shapes(x: unknown, p: string): LinkShape[] | null {
+    const a = this.arr(x, p);
+    if (a === null) return null;
+    const out: LinkShape[] = [];
+    a.forEach((s, j) => {
+      const sp = `${p}[${j}]`;
+      const so = this.obj(s, sp);
+      if (so === null) return;
+      const shape = this.shape(this.field(so, 'shape', sp), `${sp}.shape`);
+      const pose = so['pose'] === undefined || so['pose'] === null ? IDENTITY : this.pose(so['pose'], `${sp}.pose`);
+      const color = this.color(so['color'], `${sp}.color`);
+      if (shape !== null && pose !== null) out.push({ shape, pose, color });
+    });
+    return out.length === a.length ? out : null;
+  }
+
   plan(doc: unknown): Plan | null {
     const root = this.obj(doc, '');
     if (root === null) return null;
@@ -369,14 +388,29 @@ class Validator {
       const movable = ob['movable'] === undefined ? false : ob['movable'];
       if (typeof movable !== 'boolean') this.fail(`${p}.movable`, `expected true or false, found ${kindOf(movable)}`);
       const color = this.color(ob['color'], `${p}.color`);
-      const shape = this.shape(this.field(ob, 'shape', p), `${p}.shape`);
+      // Geometry: a `shape`, or `parts` (shapes posed in the object frame), or both.
+      let parts: LinkShape[] | null = [];
+      if (!('shape' in ob) && !('parts' in ob)) {
+        this.fail(`${p}.shape`, 'missing (an object needs a "shape" or "parts")');
+        parts = null;
+      }
+      if ('shape' in ob) {
+        const shape = this.shape(ob['shape'], `${p}.shape`);
+        if (shape === null) parts = null;
+        else parts?.push({ shape, pose: IDENTITY, color });
+      }
+      if ('parts' in ob) {
+        const more = this.shapes(ob['parts'], `${p}.parts`);
+        if (more === null) parts = null;
+        else parts?.push(...more.map((s) => ({ ...s, color: s.color ?? color })));
+      }
       const pose = this.pose(this.field(ob, 'pose', p), `${p}.pose`);
       if (name !== null) {
         if (names.has(name)) this.fail(`${p}.name`, `"${name}" is declared twice`);
         names.add(name);
       }
-      if (name !== null && shape !== null && pose !== null && typeof movable === 'boolean') {
-        objects.push({ name, movable, color, shape, pose });
+      if (name !== null && parts !== null && pose !== null && typeof movable === 'boolean') {
+        objects.push({ name, movable, color, parts, pose });
       }
     });
     const ags = this.arr(this.field(o, 'agents', 'scene'), 'scene.agents') ?? [];
@@ -409,17 +443,7 @@ class Validator {
       if (ln === null) return;
       if (linkNames.has(ln)) this.fail(`${lp}.name`, `link "${ln}" is declared twice`);
       linkNames.add(ln);
-      const shapes: LinkShape[] = [];
-      (this.arr(this.field(lo, 'shapes', lp), `${lp}.shapes`) ?? []).forEach((s, j) => {
-        const sp = `${lp}.shapes[${j}]`;
-        const so = this.obj(s, sp);
-        if (so === null) return;
-        const shape = this.shape(this.field(so, 'shape', sp), `${sp}.shape`);
-        const pose = so['pose'] === undefined ? { t: [0, 0, 0] as Vec3, q: [0, 0, 0, 1] as Quat } : this.pose(so['pose'], `${sp}.pose`);
-        const color = this.color(so['color'], `${sp}.color`);
-        if (shape !== null && pose !== null) shapes.push({ shape, pose, color });
-      });
-      links.push({ name: ln, shapes });
+      links.push({ name: ln, shapes: this.shapes(this.field(lo, 'shapes', lp), `${lp}.shapes`) ?? [] });
     });
     if (eye !== null && !linkNames.has(eye)) this.fail(`${p}.eye_link`, `"${eye}" is not one of the agent's links`);
     const link_poses = this.linkPoses(this.field(o, 'link_poses', p), `${p}.link_poses`, linkNames);

@@ -33,12 +33,17 @@ export class SceneView {
     for (const o of plan.scene.objects) {
       const g = new THREE.Group();
       g.name = o.name;
-      const mesh = this.mesh(o.shape, o.color ?? DEFAULT_OBJECT_COLOR, o.movable);
-      g.add(mesh);
+      const body = new THREE.Group();
+      for (const part of o.parts) {
+        const mesh = this.mesh(part.shape, part.color ?? o.color ?? DEFAULT_OBJECT_COLOR, o.movable);
+        applyPose(mesh, part.pose);
+        body.add(mesh);
+      }
+      // The label floats above the object's top, in the object's frame (body not yet posed).
+      const top = o.parts.length > 0 ? new THREE.Box3().setFromObject(body).max.z : 0;
+      g.add(body);
       g.userData = { movable: o.movable };
       applyPose(g, o.pose);
-      // The label floats above the object's top, in the object's frame.
-      const top = new THREE.Box3().setFromObject(mesh).max.z;
       this.label(g, o.name, top + 0.06, o.movable ? 'label movable' : 'label');
       this.objectsGroup.add(g);
       this.objects.set(o.name, g);

@@ -53,6 +53,14 @@ if (firstGtpStep >= 0) {
   };
 }
 
+const compound = PLAN.scene.objects.findIndex((o) => Array.isArray(o.parts) && o.parts.length > 0);
+if (compound >= 0) {
+  BAD['/bad/part-shape.json'] = {
+    text: variant((p) => (p.scene.objects[compound].parts[0].shape = { sphere: { radius: 1 } })),
+    says: [`scene.objects[${compound}].parts[0].shape`, 'unknown shape "sphere"'],
+  };
+}
+
 const extra = { '/plan.json': PLAN_TEXT };
 for (const [path, { text }] of Object.entries(BAD)) extra[path] = text;
 
