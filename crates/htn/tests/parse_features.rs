@@ -390,3 +390,24 @@ fn empty_text_and_files_that_are_not_utf8_or_missing() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_quantified_variable_shadows_a_parameter_only_inside_its_quantifier() {
+    let d = domain(
+        r#"(define (domain s) (:types a b) (:predicates (p ?x - a) (q ?x - b))
+  (:action act :parameters (?x - a)
+    :precondition (and (forall (?x - b) (q ?x)) (p ?x))
+    :effect (forall (?x - b) (not (q ?x)))))"#,
+    );
+    assert_eq!(d.actions[0].params[0].ty, "a");
+    // Outside the quantifier `?x` is an `a` again: passing it to `q` is a type error.
+    let e = parse_domain(
+        r#"(define (domain s) (:types a b) (:predicates (p ?x - a) (q ?x - b))
+  (:action act :parameters (?x - a)
+    :precondition (and (exists (?x - b) (q ?x)) (q ?x))))"#,
+        src("d.hddl"),
+    )
+    .unwrap_err();
+    assert_eq!((e.line, e.col), (3, 52));
+    assert!(e.message.contains("does not fit"), "{e}");
+}

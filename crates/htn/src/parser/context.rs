@@ -93,38 +93,51 @@ impl Tables {
 /// Variables in scope: parameters, then quantified variables (innermost last).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Scope {
-    vars: Vec<(String, String)>,
+    /// Each variable's types, innermost binding last (a quantifier may shadow a parameter).
+    types: HashMap<String, Vec<String>>,
+    /// Variables in binding order, to undo bindings in [`Scope::truncate`].
+    order: Vec<String>,
 }
 
 impl Scope {
     pub fn new(params: &[TypedName]) -> Scope {
-        Scope {
-            vars: params
-                .iter()
-                .map(|p| (p.name.clone(), p.ty.clone()))
-                .collect(),
-        }
+        let mut scope = Scope::default();
+        scope.push(params);
+        scope
     }
 
     pub fn lookup(&self, var: &str) -> Option<&str> {
-        self.vars
-            .iter()
-            .rev()
-            .find(|(n, _)| n == var)
-            .map(|(_, t)| t.as_str())
+        self.types
+            .get(var)
+            .and_then(|ts| ts.last())
+            .map(String::as_str)
     }
 
     pub fn len(&self) -> usize {
-        self.vars.len()
+        self.order.len()
     }
 
     pub fn push(&mut self, vars: &[TypedName]) {
-        self.vars
-            .extend(vars.iter().map(|v| (v.name.clone(), v.ty.clone())));
+        for v in vars {
+            self.types
+                .entry(v.name.clone())
+                .or_default()
+                .push(v.ty.clone());
+            self.order.push(v.name.clone());
+        }
     }
 
     pub fn truncate(&mut self, len: usize) {
-        self.vars.truncate(len);
+        while self.order.len() > len {
+            if let Some(name) = self.order.pop()
+                && let Some(ts) = self.types.get_mut(&name)
+            {
+                ts.pop();
+                if ts.is_empty() {
+                    self.types.remove(&name);
+                }
+            }
+        }
     }
 }
 
