@@ -42,6 +42,8 @@ enum Command {
     BenchHddl(cmd::bench_hddl::Args),
     /// Draw a scene as a PNG picture, from an agent's eyes or from above.
     Render(cmd::render::Args),
+    /// Print the shared literals a scene makes true (visible, reachable, on, inside, covered-by).
+    Facts(cmd::facts::Args),
     /// Serve the 3D web viewer and a plan JSON on 127.0.0.1, and print the URL to open.
     View(cmd::view::Args),
 }
@@ -60,6 +62,7 @@ fn main() -> ExitCode {
         Command::Validate(args) => cmd::validate::run(args),
         Command::BenchHddl(args) => cmd::bench_hddl::run(args),
         Command::Render(args) => cmd::render::run(args),
+        Command::Facts(args) => cmd::facts::run(args),
         Command::View(args) => cmd::view::run(args),
     };
     match result {

@@ -6,6 +6,7 @@ pub mod world;
 pub mod effort;
 pub mod render;
 pub mod visibility;
+pub mod facts;
 pub mod agent;
 pub mod kinematics;
 pub mod ik;

@@ -1,6 +1,7 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<u8>`.
 
 pub mod bench_hddl;
+pub mod facts;
 pub mod plan;
 pub mod render;
 pub mod validate;
