@@ -1,2 +1,12 @@
 //! HTN <-> GTP coupling: evaluable predicates answered by the geometric task planner, shared
 //! literals as add and delete lists, interleaved backtracking.
+//!
+//! [`oracle::GtpOracle`] implements the `htn` crate's [`htn::oracle::GeometricOracle`] with the
+//! `gtp` crate; the HTN search owns the choice points and the backtracking strategy
+//! ([`htn::planner::Strategy`]), the oracle owns the stack of geometric worlds.
+
+pub mod oracle;
+pub mod run;
+
+pub use oracle::{GtpOracle, OracleConfig};
+pub use run::{HybridError, Run, RunOptions, plan, plan_files};

@@ -1,0 +1,441 @@
+//! [`GtpOracle`]: the `htn` crate's evaluable predicates answered by the geometric task planner.
+//!
+//! The oracle keeps a stack of worlds, one per geometric solution the HTN search has taken
+//! (`apply` pushes, `undo` pops), and with each world its shared literals. A solution's add and
+//! delete lists are the paper's `t+` and `t-`: the shared literals of the world after the
+//! solution minus those before, and the other way round.
+//!
+//! A shared literal `visible(o, a)` or `reachable(o, a)` holds symbolically when the agent needs
+//! at most [`OracleConfig::effort_threshold`] to see or reach the object (the paper's Fig. 5:
+//! "Vis with E=1" counts as visible, E=3 does not). Only literals over names the HTN problem
+//! knows are reported (the scene may hold furniture the domain never mentions).
+
+use std::collections::{BTreeSet, HashMap, HashSet};
+use std::hash::{Hash, Hasher};
+use std::sync::Arc;
+use std::time::Instant;
+
+use geometry::facts::{FactParams, shared_literals};
+use geometry::world::World;
+use gtp::planner::{CallOptions, Planner, Solution, SolutionStream};
+use gtp::stats::Stats;
+use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, StreamId};
+use serde::Serialize;
+
+/// Settings of the oracle.
+#[derive(Clone, Debug)]
+pub struct OracleConfig {
+    /// Seed of every GTP call (mixed with the task, its arguments and the world).
+    pub seed: u64,
+    /// Highest effort level at which `visible` and `reachable` hold symbolically.
+    pub effort_threshold: u8,
+    /// Thresholds of the fact computation (visibility fraction, resolution...).
+    pub facts: FactParams,
+    /// Constraint overrides passed to every GTP call (`time-limit`, `max-points`...).
+    pub constraints: Vec<(String, String)>,
+}
+
+impl Default for OracleConfig {
+    fn default() -> Self {
+        OracleConfig {
+            seed: 1,
+            effort_threshold: 1,
+            facts: FactParams::default(),
+            constraints: Vec::new(),
+        }
+    }
+}
+
+/// Table II figures of one geometric task, summed over a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TaskStats {
+    /// Solution requests (a first solution, or another one when backtracking).
+    pub attempts: u64,
+    /// Requests that produced a solution.
+    pub successes: u64,
+    /// Search time, seconds.
+    pub time_s: f64,
+    pub points: u64,
+    pub grasps: u64,
+    pub orientations: u64,
+    pub planner_calls: u64,
+    /// Time spent computing shared literals of the resulting worlds, seconds.
+    pub facts_time_s: f64,
+    /// Why the last failed request failed (the constraint that stopped it).
+    pub last_failure: Option<String>,
+}
+
+/// A world of the stack with its shared literals.
+#[derive(Clone)]
+struct Frame {
+    world: World,
+    facts: Arc<BTreeSet<GroundAtom>>,
+    fingerprint: u64,
+}
+
+/// An open solution stream: one GTP task, or a compound `pick-and-X` run as a pick followed by X
+/// in the world the pick left (every pick solution, in turn, with every X solution).
+enum Stream {
+    Single {
+        task: String,
+        gtp: SolutionStream,
+    },
+    Sequence {
+        task: String,
+        first: SolutionStream,
+        second_task: String,
+        args: Vec<String>,
+        current: Option<(Solution, SolutionStream)>,
+    },
+}
+
+/// The GTP as an HTN oracle. See the module docs.
+pub struct GtpOracle {
+    planner: Arc<Planner>,
+    config: OracleConfig,
+    /// Names the HTN problem knows (objects and constants); literals over others are dropped.
+    known: HashSet<String>,
+    stack: Vec<Frame>,
+    /// Every solution handed out, by the id in its payload; `apply` pushes its frame.
+    solutions: Vec<Frame>,
+    streams: HashMap<u64, Stream>,
+    next_stream: u64,
+    stats: HashMap<String, TaskStats>,
+}
+
+impl GtpOracle {
+    /// An oracle over `world`. `known` lists the names of the HTN problem's objects and the
+    /// domain's constants.
+    pub fn new(
+        planner: Arc<Planner>,
+        world: World,
+        known: impl IntoIterator<Item = String>,
+        config: OracleConfig,
+    ) -> GtpOracle {
+        let known: HashSet<String> = known.into_iter().map(|s| s.to_ascii_lowercase()).collect();
+        let mut oracle = GtpOracle {
+            planner,
+            config,
+            known,
+            stack: Vec::new(),
+            solutions: Vec::new(),
+            streams: HashMap::new(),
+            next_stream: 0,
+            stats: HashMap::new(),
+        };
+        let frame = oracle.frame(world);
+        oracle.stack.push(frame);
+        oracle
+    }
+
+    /// The current world (after every applied solution).
+    pub fn world(&self) -> &World {
+        &self.stack[self.stack.len() - 1].world
+    }
+
+    /// The world a payload's solution led to (`None` for a payload of another oracle).
+    pub fn solution_world(&self, payload: &serde_json::Value) -> Option<&World> {
+        let id = payload.get("solution")?.as_u64()? as usize;
+        self.solutions.get(id).map(|f| &f.world)
+    }
+
+    /// The shared literals of the initial world.
+    pub fn initial_literals(&self) -> Vec<GroundAtom> {
+        self.stack[0].facts.iter().cloned().collect()
+    }
+
+    /// The shared literals of the current world.
+    pub fn current_facts(&self) -> &BTreeSet<GroundAtom> {
+        &self.stack[self.stack.len() - 1].facts
+    }
+
+    /// Table II figures per geometric task.
+    pub fn task_stats(&self) -> &HashMap<String, TaskStats> {
+        &self.stats
+    }
+
+    /// The symbolic shared literals of `world`.
+    pub fn literals(&self, world: &World) -> BTreeSet<GroundAtom> {
+        shared_literals(world, &self.config.facts)
+            .into_iter()
+            .filter(|f| match (f.predicate.as_str(), f.effort) {
+                ("visible" | "reachable", Some(e)) => e <= self.config.effort_threshold,
+                ("visible" | "reachable", None) => false,
+                _ => true,
+            })
+            .filter(|f| f.args.iter().all(|a| self.known.contains(a)))
+            .map(|f| GroundAtom {
+                predicate: f.predicate,
+                args: f.args,
+            })
+            .collect()
+    }
+
+    fn frame(&self, world: World) -> Frame {
+        let facts = Arc::new(self.literals(&world));
+        let fingerprint = fingerprint(&world);
+        Frame {
+            world,
+            facts,
+            fingerprint,
+        }
+    }
+
+    fn call_options(&self, task: &str, args: &[String]) -> CallOptions {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        (task, args, self.stack[self.stack.len() - 1].fingerprint).hash(&mut h);
+        CallOptions {
+            seed: self.config.seed ^ h.finish(),
+            constraints: self.config.constraints.clone(),
+        }
+    }
+
+    fn run(
+        &self,
+        world: &World,
+        task: &str,
+        args: &[String],
+    ) -> Result<SolutionStream, OracleError> {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let options = self.call_options(task, args);
+        self.planner
+            .run(world, task, &refs, &options)
+            .map_err(|e| OracleError(format!("{task}({}): {e}", args.join(", "))))
+    }
+
+    /// Pulls the next solution of a stream, with the statistics of that request.
+    fn pull(
+        &mut self,
+        id: u64,
+    ) -> Result<(Option<Solution>, Stats, String, Option<String>), OracleError> {
+        let Some(stream) = self.streams.remove(&id) else {
+            return Err(OracleError(format!("unknown stream {id}")));
+        };
+        let (result, stream) = match stream {
+            Stream::Single { task, mut gtp } => {
+                let before = gtp.stats();
+                let sol = gtp.next();
+                let delta = diff_stats(&gtp.stats(), &before);
+                let failure = gtp.failure().map(|f| f.to_string());
+                (
+                    (sol, delta, task.clone(), failure),
+                    Stream::Single { task, gtp },
+                )
+            }
+            Stream::Sequence {
+                task,
+                mut first,
+                second_task,
+                args,
+                mut current,
+            } => {
+                let mut delta = Stats::default();
+                let mut failure = None;
+                let sol = loop {
+                    if let Some((pick, second)) = current.as_mut() {
+                        let before = second.stats();
+                        let next = second.next();
+                        add_stats(&mut delta, &diff_stats(&second.stats(), &before));
+                        if let Some(mut s) = next {
+                            s.summary
+                                .trajectories
+                                .splice(0..0, pick.summary.trajectories.iter().cloned());
+                            if s.summary.grasp.is_none() {
+                                s.summary.grasp = pick.summary.grasp.clone();
+                            }
+                            break Some(s);
+                        }
+                        failure = second.failure().map(|f| f.to_string());
+                        current = None;
+                    }
+                    let before = first.stats();
+                    let next = first.next();
+                    add_stats(&mut delta, &diff_stats(&first.stats(), &before));
+                    match next {
+                        None => {
+                            if failure.is_none() {
+                                failure = first.failure().map(|f| format!("pick: {f}"));
+                            }
+                            break None;
+                        }
+                        Some(pick) => {
+                            let second = self.run(&pick.world, &second_task, &args)?;
+                            current = Some((pick, second));
+                        }
+                    }
+                };
+                (
+                    (sol, delta, task.clone(), failure),
+                    Stream::Sequence {
+                        task,
+                        first,
+                        second_task,
+                        args,
+                        current,
+                    },
+                )
+            }
+        };
+        self.streams.insert(id, stream);
+        Ok(result)
+    }
+}
+
+/// The GTP tasks a compound task runs in sequence (`pick-and-show` = pick, then show).
+/// `pick-and-make-accessible` is a task of the GTP itself (grasp chosen for the placement).
+fn compound_parts(task: &str) -> Option<&str> {
+    match task {
+        "pick-and-show" => Some("show"),
+        "pick-and-give" => Some("give"),
+        "pick-and-put-away" => Some("put-away"),
+        "pick-and-place-on" | "pick-and-put-on" => Some("place-on"),
+        _ => None,
+    }
+}
+
+impl GeometricOracle for GtpOracle {
+    fn initial_facts(&mut self) -> Result<Vec<GroundAtom>, OracleError> {
+        Ok(self.initial_literals())
+    }
+
+    fn open(&mut self, task: &str, args: &[String]) -> Result<StreamId, OracleError> {
+        let world = self.world().clone();
+        let stream = match compound_parts(task) {
+            Some(second) => Stream::Sequence {
+                task: task.to_string(),
+                first: self.run(&world, "pick", &args[..1.min(args.len())])?,
+                second_task: second.to_string(),
+                args: args.to_vec(),
+                current: None,
+            },
+            None => Stream::Single {
+                task: task.to_string(),
+                gtp: self.run(&world, task, args)?,
+            },
+        };
+        let id = self.next_stream;
+        self.next_stream += 1;
+        self.streams.insert(id, stream);
+        Ok(StreamId(id))
+    }
+
+    fn next_solution(&mut self, stream: StreamId) -> Result<Option<GeoSolution>, OracleError> {
+        let (solution, delta, task, failure) = self.pull(stream.0)?;
+        let t0 = Instant::now();
+        let result = match solution {
+            None => None,
+            Some(sol) => {
+                let frame = self.frame(sol.world);
+                let before = self.current_facts();
+                let add = frame.facts.difference(before).cloned().collect();
+                let delete = before.difference(&frame.facts).cloned().collect();
+                let id = self.solutions.len();
+                let summary = serde_json::to_value(&sol.summary).unwrap_or(serde_json::Value::Null);
+                self.solutions.push(frame);
+                Some(GeoSolution {
+                    add,
+                    delete,
+                    payload: serde_json::json!({ "solution": id, "summary": summary }),
+                })
+            }
+        };
+        let s = self.stats.entry(task).or_default();
+        s.attempts += 1;
+        s.successes += u64::from(result.is_some());
+        s.time_s += delta.time_s;
+        s.points += delta.points as u64;
+        s.grasps += delta.grasps as u64;
+        s.orientations += delta.orientations as u64;
+        s.planner_calls += delta.planner_calls as u64;
+        s.facts_time_s += t0.elapsed().as_secs_f64();
+        if result.is_none() {
+            s.last_failure = failure;
+        }
+        Ok(result)
+    }
+
+    fn close(&mut self, stream: StreamId) {
+        self.streams.remove(&stream.0);
+    }
+
+    fn apply(&mut self, solution: &GeoSolution) -> Result<(), OracleError> {
+        let frame = solution
+            .payload
+            .get("solution")
+            .and_then(|v| v.as_u64())
+            .and_then(|id| self.solutions.get(id as usize))
+            .cloned()
+            .ok_or_else(|| OracleError("a solution this oracle did not produce".into()))?;
+        self.stack.push(frame);
+        Ok(())
+    }
+
+    fn undo(&mut self) {
+        if self.stack.len() > 1 {
+            self.stack.pop();
+        }
+    }
+
+    fn world_fingerprint(&self) -> u64 {
+        self.stack[self.stack.len() - 1].fingerprint
+    }
+
+    fn stats(&self) -> serde_json::Value {
+        let tasks: std::collections::BTreeMap<_, _> = self.stats.iter().collect();
+        serde_json::to_value(tasks).unwrap_or_default()
+    }
+}
+
+/// A hash of every object's pose, attachment and every agent's configuration, to the
+/// millimetre: two worlds that differ in geometry only are told apart by the HTN search.
+pub fn fingerprint(world: &World) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let q = |v: f32| (v * 1000.0).round() as i64;
+    for id in world.object_ids() {
+        let p = world.object_pose(id);
+        for v in [p.translation.x, p.translation.y, p.translation.z] {
+            q(v).hash(&mut h);
+        }
+        for v in [p.rotation.x, p.rotation.y, p.rotation.z, p.rotation.w] {
+            q(v).hash(&mut h);
+        }
+        world
+            .attachment(id)
+            .map(|a| (a.agent.0, a.link))
+            .hash(&mut h);
+    }
+    for id in world.agent_ids() {
+        let s = world.agent_state(id);
+        for v in [
+            s.base.translation.x,
+            s.base.translation.y,
+            s.base.rotation.z,
+            s.base.rotation.w,
+        ] {
+            q(v).hash(&mut h);
+        }
+        for v in &s.q {
+            q(*v).hash(&mut h);
+        }
+    }
+    h.finish()
+}
+
+fn diff_stats(after: &Stats, before: &Stats) -> Stats {
+    Stats {
+        time_s: after.time_s - before.time_s,
+        points: after.points.saturating_sub(before.points),
+        grasps: after.grasps.saturating_sub(before.grasps),
+        orientations: after.orientations.saturating_sub(before.orientations),
+        planner_calls: after.planner_calls.saturating_sub(before.planner_calls),
+        ..Stats::default()
+    }
+}
+
+fn add_stats(acc: &mut Stats, d: &Stats) {
+    acc.time_s += d.time_s;
+    acc.points += d.points;
+    acc.grasps += d.grasps;
+    acc.orientations += d.orientations;
+    acc.planner_calls += d.planner_calls;
+}
