@@ -21,7 +21,7 @@ const options = {
   minify: !serve,
   sourcemap: true,
   legalComments: 'linked',
-  logLevel: 'info',
+  logLevel: serve ? 'info' : 'warning',
 };
 
 if (!serve) rmSync(dist, { recursive: true, force: true });

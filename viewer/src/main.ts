@@ -110,6 +110,8 @@ class App {
     this.labels.domElement.style.inset = '0';
     this.labels.domElement.style.pointerEvents = 'none';
     this.view.append(this.labels.domElement);
+    const labelsToggle = document.getElementById('labels-toggle') as HTMLInputElement;
+    labelsToggle.addEventListener('change', () => (this.labels.domElement.hidden = !labelsToggle.checked));
 
     this.scene.background = BACKGROUND;
     this.camera.up.set(0, 0, 1);
@@ -275,8 +277,8 @@ class App {
   }
 
   play(speed?: number): void {
-    if (this.timeline === null) return;
     if (speed !== undefined) this.speed = speed;
+    if (this.timeline === null || this.timeline.duration <= 0) return;
     if (this.t >= this.timeline.duration) this.t = 0;
     this.playing = true;
     this.last = performance.now();
@@ -357,7 +359,8 @@ class App {
   }
 
   private frame(now: number): void {
-    const dt = Math.min((now - this.last) / 1000, 0.1);
+    // rAF's timestamp is the frame's start: it can precede a `last` taken by play() just before.
+    const dt = Math.min(Math.max((now - this.last) / 1000, 0), 0.1);
     this.last = now;
     if (this.playing && this.timeline !== null) {
       this.t += dt * this.speed;

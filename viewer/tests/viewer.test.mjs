@@ -61,7 +61,16 @@ if (compound >= 0) {
   };
 }
 
-const extra = { '/plan.json': PLAN_TEXT };
+// A run that found no plan: the scene is still shown, with the reason.
+const UNSOLVED = variant((p) => {
+  p.status = 'unsolvable';
+  p.message = 'no method of lend(member) applies';
+  p.steps = [];
+  p.tree = [];
+  p.root = [];
+});
+
+const extra = { '/plan.json': PLAN_TEXT, '/unsolved.json': UNSOLVED };
 for (const [path, { text }] of Object.entries(BAD)) extra[path] = text;
 
 let server;
@@ -295,7 +304,22 @@ describe('bad input shows the error panel', () => {
     });
   }
 
-  test('a missing plan says how to get one, and the file picker then loads a plan', async () => {
+  test('a run without a plan shows the scene and why there is no plan', async () => {
+    const page = await open(browser.context, `${server.url}?plan=/unsolved.json`);
+    try {
+      const h = await hook(page, () => ({ ready: __htngtp.ready, error: __htngtp.error, objects: __htngtp.objectCount, steps: __htngtp.stepCount, step: __htngtp.currentStep }));
+      assert.deepEqual(h, { ready: true, error: null, objects: PLAN.scene.objects.length, steps: 0, step: -1 });
+      assert.equal(await page.isVisible('#error-panel'), false);
+      assert.ok((await page.textContent('#status-banner')).includes('no method of lend(member) applies'));
+      assert.ok((await hook(page, () => __htngtp.pixelStats())).variance > 200);
+      await hook(page, () => __htngtp.play(10)); // nothing to play: must not throw or move
+      assert.equal(await hook(page, () => __htngtp.time), 0);
+    } finally {
+      await page.close();
+    }
+  });
+
+  test('a missing plan says how to get one; the file picker and drag-and-drop then load plans', async () => {
     const page = await open(browser.context, `${server.url}?plan=nowhere.json`);
     try {
       const text = await page.textContent('#error-panel');
@@ -310,6 +334,16 @@ describe('bad input shows the error panel', () => {
       await page.waitForFunction(() => __htngtp.error !== null, null, { timeout: 10_000 });
       assert.ok((await page.textContent('#error-panel')).includes('broken.json'));
       assert.equal(await hook(page, () => __htngtp.objectCount), 0);
+      // Dropping a plan on the page opens it too.
+      const dropped = await page.evaluateHandle((text) => {
+        const d = new DataTransfer();
+        d.items.add(new File([text], 'dropped.json', { type: 'application/json' }));
+        return d;
+      }, PLAN_TEXT);
+      await page.dispatchEvent('#view', 'drop', { dataTransfer: dropped });
+      await page.waitForFunction(() => __htngtp.ready, null, { timeout: 10_000 });
+      assert.equal(await page.isVisible('#error-panel'), false);
+      assert.ok((await page.textContent('#title')).includes('dropped.json'));
     } finally {
       await page.close();
     }
