@@ -1,0 +1,197 @@
+//! The evaluable-predicate interface and the three backtracking strategies, with a fake
+//! geometric world: a desk with two slots, front (`p1`) and back (`p2`). A book can go on a free
+//! slot, but a book in the front slot blocks the arm's path: while it is there nothing else can
+//! be placed. Putting the first book at the back keeps the front free for the second.
+//!
+//! With two light books (`desk-light`), Symbolic and Chronological both give the second book by
+//! hand (the newest choice point is its method), while GeometricFirst moves the first book to
+//! the back and puts both on the desk. With the second book heavy (`desk-heavy`), Symbolic must
+//! change HTN choices (second book first on the desk, first by hand), while Chronological and
+//! GeometricFirst re-place the first book.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use htn::model::{Domain, Problem};
+use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, StreamId};
+use htn::plan::Plan;
+use htn::planner::{Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan};
+use htn::validate::validate;
+
+const SLOTS: [&str; 2] = ["p1", "p2"];
+
+#[derive(Default)]
+struct Desk {
+    /// (book, slot) placed so far.
+    world: Vec<(String, String)>,
+    saved: Vec<Vec<(String, String)>>,
+    streams: HashMap<u64, (String, Vec<(String, String)>, usize)>,
+    next_id: u64,
+    solutions_given: usize,
+}
+
+impl GeometricOracle for Desk {
+    fn initial_facts(&mut self) -> Result<Vec<GroundAtom>, OracleError> {
+        Ok(Vec::new())
+    }
+    fn open(&mut self, task: &str, args: &[String]) -> Result<StreamId, OracleError> {
+        assert_eq!(task, "make-accessible");
+        self.next_id += 1;
+        self.streams
+            .insert(self.next_id, (args[0].clone(), self.world.clone(), 0));
+        Ok(StreamId(self.next_id))
+    }
+    fn next_solution(&mut self, s: StreamId) -> Result<Option<GeoSolution>, OracleError> {
+        let (book, opened_in, pos) = self.streams.get_mut(&s.0).expect("an open stream");
+        // Stack discipline: a stream is asked only in the world it was opened in.
+        assert_eq!(*opened_in, self.world, "stream asked in another world");
+        let blocked = self.world.iter().any(|(_, slot)| slot == "p1");
+        while *pos < SLOTS.len() {
+            let slot = SLOTS[*pos];
+            *pos += 1;
+            if !blocked && !self.world.iter().any(|(_, s)| s == slot) {
+                self.solutions_given += 1;
+                return Ok(Some(GeoSolution {
+                    add: vec![GroundAtom::new("on-desk", &[book])],
+                    delete: vec![],
+                    payload: serde_json::json!({ "book": book, "slot": slot }),
+                }));
+            }
+        }
+        Ok(None)
+    }
+    fn close(&mut self, s: StreamId) {
+        self.streams.remove(&s.0);
+    }
+    fn apply(&mut self, sol: &GeoSolution) -> Result<(), OracleError> {
+        self.saved.push(self.world.clone());
+        let book = sol.payload["book"].as_str().unwrap().to_string();
+        let slot = sol.payload["slot"].as_str().unwrap().to_string();
+        self.world.push((book, slot));
+        Ok(())
+    }
+    fn undo(&mut self) {
+        self.world = self.saved.pop().expect("an apply to undo");
+    }
+    fn world_fingerprint(&self) -> u64 {
+        let mut h = 0u64;
+        for (b, s) in &self.world {
+            for c in b.bytes().chain(s.bytes()) {
+                h = h.wrapping_mul(31).wrapping_add(c as u64);
+            }
+        }
+        h
+    }
+}
+
+fn load(problem: &str) -> (Domain, Problem) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/domains");
+    let d = htn::load_domain(dir.join("desk-domain.hddl")).unwrap();
+    let p = htn::load_problem(dir.join(problem), &d).unwrap();
+    (d, p)
+}
+
+/// Plans with a fresh desk; returns the plan's steps as text (`makebkacc b1@p2`, `givebk b2`)
+/// and the statistics. Checks the plan with the validator and the desk's final world.
+fn run(problem: &str, strategy: Strategy) -> (Vec<String>, SearchStats) {
+    let (d, p) = load(problem);
+    let mut desk = Desk::default();
+    let opts = PlannerOptions {
+        strategy,
+        ..PlannerOptions::default()
+    };
+    let r = plan(&d, &p, &opts, Some(&mut desk)).unwrap();
+    let Outcome::Found { plan } = r.outcome else {
+        panic!("{problem} {strategy:?}: no plan: {:?}", r.outcome)
+    };
+    validate(&d, &p, &plan, &[]).unwrap();
+    // The world the desk is left in is the plan's: one placement per GS step, in order.
+    let placed: Vec<(String, String)> = plan
+        .actions
+        .iter()
+        .filter_map(|a| a.geometric.as_ref())
+        .map(|g| {
+            (
+                g.payload["book"].as_str().unwrap().to_string(),
+                g.payload["slot"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    assert_eq!(desk.world, placed);
+    (steps(&plan), r.stats)
+}
+
+fn steps(plan: &Plan) -> Vec<String> {
+    plan.actions
+        .iter()
+        .map(|a| match &a.geometric {
+            Some(g) => format!(
+                "{} {}@{}",
+                a.name,
+                a.args[0],
+                g.payload["slot"].as_str().unwrap()
+            ),
+            None => format!("{} {}", a.name, a.args[0]),
+        })
+        .collect()
+}
+
+#[test]
+fn light_books_symbolic_hands_the_second_over() {
+    let (s, st) = run("desk-light.hddl", Strategy::Symbolic);
+    assert_eq!(s, ["makebkacc b1@p1", "givebk b2"]);
+    assert_eq!(st.geo_backtracks, 0);
+    assert_eq!(st.htn_backtracks, 1);
+}
+
+#[test]
+fn light_books_chronological_revisits_the_newest_choice_an_htn_one() {
+    let (s, st) = run("desk-light.hddl", Strategy::Chronological);
+    assert_eq!(s, ["makebkacc b1@p1", "givebk b2"]);
+    assert_eq!(st.geo_backtracks, 0);
+}
+
+#[test]
+fn light_books_geometric_first_moves_the_first_book_to_the_back() {
+    let (s, st) = run("desk-light.hddl", Strategy::GeometricFirst { k: 1 });
+    assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
+    assert_eq!(st.geo_backtracks, 1);
+    assert_eq!(st.htn_backtracks, 0);
+    assert_eq!((st.geo_repairs, st.geo_repairs_succeeded), (1, 1));
+}
+
+#[test]
+fn geometric_first_with_no_budget_behaves_like_symbolic() {
+    let (s, _) = run("desk-light.hddl", Strategy::GeometricFirst { k: 0 });
+    assert_eq!(s, ["makebkacc b1@p1", "givebk b2"]);
+}
+
+#[test]
+fn heavy_book_symbolic_changes_the_htn_choices() {
+    let (s, st) = run("desk-heavy.hddl", Strategy::Symbolic);
+    assert_eq!(s, ["makebkacc b2@p1", "givebk b1"]);
+    assert_eq!(st.geo_backtracks, 0);
+    assert!(st.htn_backtracks >= 2);
+}
+
+#[test]
+fn heavy_book_chronological_replaces_the_first_book() {
+    let (s, st) = run("desk-heavy.hddl", Strategy::Chronological);
+    assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
+    assert_eq!(st.geo_backtracks, 1);
+}
+
+#[test]
+fn heavy_book_geometric_first_replaces_the_first_book() {
+    let (s, st) = run("desk-heavy.hddl", Strategy::GeometricFirst { k: 2 });
+    assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
+    assert_eq!(st.geo_repairs_succeeded, 1);
+}
+
+#[test]
+fn without_a_geometric_back_end_planning_names_the_first_gs_action() {
+    let (d, p) = load("desk-light.hddl");
+    let e = plan(&d, &p, &PlannerOptions::default(), None).unwrap_err();
+    assert!(matches!(&e, PlanError::NoOracle { action, .. } if action == "makebkacc"));
+    assert!(e.to_string().contains("make-accessible"), "{e}");
+}
