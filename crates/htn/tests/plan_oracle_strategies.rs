@@ -20,12 +20,16 @@ use htn::validate::validate;
 
 const SLOTS: [&str; 2] = ["p1", "p2"];
 
+/// A book placed on a slot.
+type Placement = (String, String);
+
 #[derive(Default)]
 struct Desk {
     /// (book, slot) placed so far.
     world: Vec<(String, String)>,
     saved: Vec<Vec<(String, String)>>,
-    streams: HashMap<u64, (String, Vec<(String, String)>, usize)>,
+    /// Per stream: the book, the world it was opened in, the next slot to try.
+    streams: HashMap<u64, (String, Vec<Placement>, usize)>,
     next_id: u64,
     solutions_given: usize,
 }
