@@ -34,6 +34,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run the library-receptionist scenario end to end (the paper's domain and scene).
+    Demo(cmd::demo::Args),
     /// Plan an HDDL problem (optionally with a 3D scene for geometric tasks).
     Plan(cmd::plan::Args),
     /// Check a plan in the competition format against a domain and problem.
@@ -52,12 +54,17 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let code = if e.use_stderr() { exit::BAD_INPUT } else { exit::OK };
+            let code = if e.use_stderr() {
+                exit::BAD_INPUT
+            } else {
+                exit::OK
+            };
             let _ = e.print();
             return ExitCode::from(code);
         }
     };
     let result = match cli.command {
+        Command::Demo(args) => cmd::demo::run(args),
         Command::Plan(args) => cmd::plan::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::BenchHddl(args) => cmd::bench_hddl::run(args),

@@ -101,6 +101,10 @@ pub struct GtpOracle {
     streams: HashMap<u64, Stream>,
     next_stream: u64,
     stats: HashMap<String, TaskStats>,
+    /// The last request that found no solution: task, arguments, why.
+    last_failure: Option<(String, Vec<String>, String)>,
+    /// Arguments of each open stream (for failure reports).
+    stream_args: HashMap<u64, Vec<String>>,
 }
 
 impl GtpOracle {
@@ -122,6 +126,8 @@ impl GtpOracle {
             streams: HashMap::new(),
             next_stream: 0,
             stats: HashMap::new(),
+            last_failure: None,
+            stream_args: HashMap::new(),
         };
         let frame = oracle.frame(world);
         oracle.stack.push(frame);
@@ -137,6 +143,17 @@ impl GtpOracle {
     pub fn solution_world(&self, payload: &serde_json::Value) -> Option<&World> {
         let id = payload.get("solution")?.as_u64()? as usize;
         self.solutions.get(id).map(|f| &f.world)
+    }
+
+    /// The geometric task planner answering the predicates.
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+
+    /// The last geometric task that found no (further) solution, with its arguments and the
+    /// constraint that stopped it.
+    pub fn last_failure(&self) -> Option<&(String, Vec<String>, String)> {
+        self.last_failure.as_ref()
     }
 
     /// The shared literals of the initial world.
@@ -316,6 +333,7 @@ impl GeometricOracle for GtpOracle {
         let id = self.next_stream;
         self.next_stream += 1;
         self.streams.insert(id, stream);
+        self.stream_args.insert(id, args.to_vec());
         Ok(StreamId(id))
     }
 
@@ -339,7 +357,7 @@ impl GeometricOracle for GtpOracle {
                 })
             }
         };
-        let s = self.stats.entry(task).or_default();
+        let s = self.stats.entry(task.clone()).or_default();
         s.attempts += 1;
         s.successes += u64::from(result.is_some());
         s.time_s += delta.time_s;
@@ -349,13 +367,17 @@ impl GeometricOracle for GtpOracle {
         s.planner_calls += delta.planner_calls as u64;
         s.facts_time_s += t0.elapsed().as_secs_f64();
         if result.is_none() {
-            s.last_failure = failure;
+            let why = failure.unwrap_or_else(|| "no further solution".into());
+            s.last_failure = Some(why.clone());
+            let args = self.stream_args.get(&stream.0).cloned().unwrap_or_default();
+            self.last_failure = Some((task, args, why));
         }
         Ok(result)
     }
 
     fn close(&mut self, stream: StreamId) {
         self.streams.remove(&stream.0);
+        self.stream_args.remove(&stream.0);
     }
 
     fn apply(&mut self, solution: &GeoSolution) -> Result<(), OracleError> {

@@ -56,6 +56,20 @@ impl Run {
     }
 }
 
+impl Run {
+    /// Why no plan was found, in words: the last geometric task that failed and the constraint
+    /// that stopped it, when there is one.
+    pub fn failure_message(&self) -> String {
+        match self.oracle.last_failure() {
+            Some((task, args, why)) => format!(
+                "no decomposition works; the last geometric task to fail was {task}({}): {why}",
+                args.join(", ")
+            ),
+            None => "no decomposition works (no geometric task failed)".into(),
+        }
+    }
+}
+
 /// The names the HTN problem knows: its objects and the domain's constants.
 pub fn known_names(domain: &Domain, problem: &Problem) -> Vec<String> {
     domain

@@ -1,7 +1,9 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<u8>`.
 
 pub mod bench_hddl;
+pub mod demo;
 pub mod facts;
+pub mod geo;
 pub mod plan;
 pub mod render;
 pub mod validate;

@@ -41,8 +41,18 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = StrategyArg::Chronological)]
     pub strategy: StrategyArg,
     /// With --strategy geometric-first: how many other geometric solutions to try per failure.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, alias = "geo-alternatives", default_value_t = 3)]
     pub geo_k: usize,
+    /// A 3D scene (docs/scene-format.md): geometric tasks are answered by the GTP in it, and the
+    /// shared predicates' initial facts are computed from it.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// With --scene: write pictures of the world after each GS action into this folder.
+    #[arg(long, value_name = "DIR", requires = "scene")]
+    pub png: Option<PathBuf>,
+    /// With --scene: write the plan JSON (docs/plan-json.md) to this file as well.
+    #[arg(long, value_name = "FILE", requires = "scene")]
+    pub json_out: Option<PathBuf>,
 }
 
 /// The `--strategy` values.
@@ -73,6 +83,25 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         },
         ..PlannerOptions::default()
     };
+    if let Some(scene) = &args.scene {
+        let oracle = hybrid::OracleConfig {
+            seed: args.seed,
+            ..hybrid::OracleConfig::default()
+        };
+        let out = crate::cmd::geo::Outputs {
+            json: args.json,
+            json_file: args.json_out.clone(),
+            png_dir: args.png.clone(),
+        };
+        return crate::cmd::geo::run_plan(
+            &args.domain,
+            &args.problem,
+            scene,
+            options,
+            oracle,
+            &out,
+        );
+    }
     let result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;
     if let Outcome::Found { plan } = &result.outcome {

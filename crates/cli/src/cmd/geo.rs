@@ -1,0 +1,211 @@
+//! Combined HTN-GTP planning from the command line: `htngtp plan ... --scene SCENE` and
+//! `htngtp demo` share this. Prints the decomposition tree and the plan with each GS action's
+//! geometric summary, the run's statistics, and writes the plan JSON and pictures on request.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use geometry::render::{Camera, agent_camera, render};
+use geometry::scene::AgentKind;
+use geometry::world::World;
+use htn::planner::{Outcome, PlannerOptions};
+use hybrid::{OracleConfig, Run, RunOptions};
+
+use crate::exit;
+
+/// Where the outputs of a combined run go.
+#[derive(Default)]
+pub struct Outputs {
+    /// Print the plan JSON on standard output instead of the text report.
+    pub json: bool,
+    /// Write the plan JSON to this file.
+    pub json_file: Option<PathBuf>,
+    /// Write pictures of the world after each GS action into this folder.
+    pub png_dir: Option<PathBuf>,
+}
+
+/// Plans `problem` of `domain` in `scene` and reports; returns the exit code.
+pub fn run_plan(
+    domain_path: &Path,
+    problem_path: &Path,
+    scene: &Path,
+    planner: PlannerOptions,
+    oracle: OracleConfig,
+    out: &Outputs,
+) -> anyhow::Result<u8> {
+    let domain = htn::load_domain(domain_path)?;
+    let problem = htn::load_problem(problem_path, &domain)?;
+    let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let options = RunOptions { planner, oracle };
+    let run = hybrid::plan(
+        &domain,
+        &problem,
+        world,
+        std::sync::Arc::new(gtp::planner::Planner::new()),
+        &options,
+    )?;
+    let json = hybrid::export::plan_json(&run, &domain.name, &problem.name);
+    if out.json {
+        println!("{}", serde_json::to_string(&json)?);
+    } else {
+        print_report(&run);
+    }
+    if let Some(f) = &out.json_file {
+        std::fs::write(f, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing {}", f.display()))?;
+        eprintln!("plan JSON written to {}", f.display());
+    }
+    if let Some(dir) = &out.png_dir {
+        let n = write_pictures(&run, dir)?;
+        eprintln!("{n} pictures written to {}", dir.display());
+    }
+    Ok(match &run.result.outcome {
+        Outcome::Found { .. } => exit::OK,
+        Outcome::Unsolvable => exit::UNSOLVABLE,
+        Outcome::LimitReached { .. } => exit::LIMIT,
+    })
+}
+
+/// The text report: tree, plan with GTP summaries, statistics, or why no plan exists.
+pub fn print_report(run: &Run) {
+    let stats = &run.result.stats;
+    match &run.result.outcome {
+        Outcome::Found { plan } => {
+            println!("Decomposition:");
+            let by_id: std::collections::HashMap<u32, &htn::plan::Decomposition> =
+                plan.decompositions.iter().map(|d| (d.id, d)).collect();
+            let actions: std::collections::HashMap<u32, &htn::plan::PlanAction> =
+                plan.actions.iter().map(|a| (a.id, a)).collect();
+            fn walk(
+                id: u32,
+                depth: usize,
+                by_id: &std::collections::HashMap<u32, &htn::plan::Decomposition>,
+                actions: &std::collections::HashMap<u32, &htn::plan::PlanAction>,
+            ) {
+                let pad = "  ".repeat(depth + 1);
+                if let Some(d) = by_id.get(&id) {
+                    println!("{pad}{} {} -> {}", d.task, d.args.join(" "), d.method);
+                    for &c in &d.subtasks {
+                        walk(c, depth + 1, by_id, actions);
+                    }
+                } else if let Some(a) = actions.get(&id) {
+                    println!("{pad}{} {}", a.name.to_uppercase(), a.args.join(" "));
+                }
+            }
+            for &r in &plan.root {
+                walk(r, 0, &by_id, &actions);
+            }
+            println!("\nPlan ({} actions):", plan.actions.len());
+            for (i, a) in plan.actions.iter().enumerate() {
+                println!("  {i:>2}. {} {}", a.name, a.args.join(" "));
+                if let Some(g) = &a.geometric {
+                    let s = &g.payload["summary"];
+                    let mut parts = vec![format!("{}({})", g.task, g.args.join(", "))];
+                    if let Some(x) = s["grasp"].as_object() {
+                        parts.push(format!(
+                            "grasp {} on {}",
+                            x.get("id").map(|v| v.to_string()).unwrap_or_default(),
+                            x.get("arm").and_then(|v| v.as_str()).unwrap_or("?")
+                        ));
+                    }
+                    if let Some(p) = s["placement"].as_object() {
+                        let pt = &p["point"];
+                        parts.push(format!(
+                            "placed on {} at ({:.2}, {:.2}, {:.2})",
+                            p.get("support")
+                                .and_then(|v| v.as_str())
+                                .unwrap_or("(held)"),
+                            pt[0].as_f64().unwrap_or(0.0),
+                            pt[1].as_f64().unwrap_or(0.0),
+                            pt[2].as_f64().unwrap_or(0.0)
+                        ));
+                    }
+                    if let Some(v) = s["visibility"].as_f64() {
+                        parts.push(format!("visibility {:.0}%", v * 100.0));
+                    }
+                    let len: f64 = s["trajectories"]
+                        .as_array()
+                        .map(|t| t.iter().filter_map(|t| t["length"].as_f64()).sum())
+                        .unwrap_or(0.0);
+                    parts.push(format!("trajectory length {len:.2}"));
+                    println!("      GTP: {}", parts.join("; "));
+                    let fmt = |v: &[htn::oracle::GroundAtom]| {
+                        v.iter()
+                            .map(|a| a.to_string())
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    };
+                    if !g.add.is_empty() {
+                        println!("      + {}", fmt(&g.add));
+                    }
+                    if !g.delete.is_empty() {
+                        println!("      - {}", fmt(&g.delete));
+                    }
+                }
+            }
+        }
+        Outcome::Unsolvable => println!("No plan: {}", run.failure_message()),
+        Outcome::LimitReached { limit } => {
+            println!("Stopped by the {limit}; {}", run.failure_message())
+        }
+    }
+    println!(
+        "\nStatistics: {} nodes, {} HTN backtracks, {} GTP backtracks, {:.3} s",
+        stats.nodes, stats.htn_backtracks, stats.geo_backtracks, stats.time_s
+    );
+    let mut tasks: Vec<_> = run.oracle.task_stats().iter().collect();
+    tasks.sort_by(|a, b| a.0.cmp(b.0));
+    println!(
+        "  {:<26} {:>8} {:>6} {:>9} {:>5} {:>7} {:>5} {:>6}",
+        "GTP task", "attempts", "succ", "time ms", "pts", "grasps", "orts", "calls"
+    );
+    for (name, s) in tasks {
+        println!(
+            "  {:<26} {:>8} {:>6} {:>9.1} {:>5} {:>7} {:>5} {:>6}",
+            name,
+            s.attempts,
+            s.successes,
+            (s.time_s + s.facts_time_s) * 1e3,
+            s.points,
+            s.grasps,
+            s.orientations,
+            s.planner_calls
+        );
+    }
+}
+
+/// Pictures of the initial world and of the world after each GS action, from the first human's
+/// eyes and from above. Returns how many were written.
+pub fn write_pictures(run: &Run, dir: &Path) -> anyhow::Result<usize> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut worlds: Vec<(String, &World)> = vec![("00-initial".into(), &run.initial)];
+    if let Outcome::Found { plan } = &run.result.outcome {
+        for (i, a) in plan.actions.iter().enumerate() {
+            if let Some(w) = a
+                .geometric
+                .as_ref()
+                .and_then(|g| run.oracle.solution_world(&g.payload))
+            {
+                worlds.push((format!("{:02}-{}", i + 1, a.name), w));
+            }
+        }
+    }
+    let mut n = 0;
+    for (label, world) in worlds {
+        let human = world
+            .agent_ids()
+            .find(|&a| world.agent(a).kind() == AgentKind::Human);
+        let mut views = vec![("top", Camera::top(&world.bounds(), 4.0 / 3.0), 480, 360)];
+        if let Some(h) = human {
+            views.push(("human", agent_camera(world, h), 480, 360));
+        }
+        for (view, camera, w, h) in views {
+            let path = dir.join(format!("{label}-{view}.png"));
+            render(world, &camera, w, h)
+                .save_png(&path)
+                .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))?;
+            n += 1;
+        }
+    }
+    Ok(n)
+}
