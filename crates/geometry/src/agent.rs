@@ -47,10 +47,13 @@ pub enum ModelError {
         source: std::io::Error,
     },
     /// The text is not well-formed URDF XML (as reported by `urdf-rs`).
-    #[error("{source_name}: not a valid URDF document: {message}")]
+    #[error("{source_name}{}: not a valid URDF document: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
     Syntax {
         /// File name (or another name given for the text).
         source_name: String,
+        /// The 1-based line of the offending text, when the message quotes it and it could be
+        /// found (urdf-rs reports no positions).
+        line: Option<usize>,
         /// What `urdf-rs` reported.
         message: String,
     },
@@ -813,6 +816,24 @@ mod loader {
         None
     }
 
+    /// The line of the text that `message` quotes (between backticks or square brackets), as
+    /// an attribute value: urdf-rs quotes the bad value but gives no position.
+    fn locate_quoted(text: &str, message: &str) -> Option<usize> {
+        let quoted = |open: char, close: char| -> Option<&str> {
+            let start = message.find(open)? + open.len_utf8();
+            let end = start + message[start..].find(close)?;
+            Some(&message[start..end])
+        };
+        let needle = quoted('`', '`').or_else(|| quoted('[', ']'))?;
+        if needle.trim().is_empty() {
+            return None;
+        }
+        let pos = text
+            .find(&format!("\"{needle}\""))
+            .or_else(|| text.find(&format!("'{needle}'")))?;
+        Some(text[..pos].matches('\n').count() + 1)
+    }
+
     fn finite3(v: &[f64; 3]) -> bool {
         v.iter().all(|x| x.is_finite())
     }
@@ -923,14 +944,17 @@ mod loader {
         let robot = match parsed {
             Ok(Ok(r)) => r,
             Ok(Err(e)) => {
+                let message = e.to_string();
                 return Err(ModelError::Syntax {
                     source_name: source_name.to_string(),
-                    message: e.to_string(),
+                    line: locate_quoted(text, &message),
+                    message,
                 });
             }
             Err(_) => {
                 return Err(ModelError::Syntax {
                     source_name: source_name.to_string(),
+                    line: None,
                     message: "the URDF parser failed on this document".to_string(),
                 });
             }

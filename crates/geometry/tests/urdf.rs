@@ -74,3 +74,135 @@ fn configuration_rejects_out_of_limit_values() {
     q.set("r_wrist_roll_joint", 12.0).unwrap();
     assert!(pr2.configuration(vec![0.0; 3]).is_err());
 }
+
+/// Every malformed file in `tests/bad_urdf/` with (the line reported, a phrase of the message).
+const BAD: &[(&str, Option<usize>, &str)] = &[
+    ("bad_number.urdf", Some(8), "expected 3 found 2"),
+    (
+        "duplicate_joint.urdf",
+        Some(6),
+        "joint 'j' is defined twice",
+    ),
+    (
+        "duplicate_link.urdf",
+        Some(4),
+        "link 'arm' is defined twice",
+    ),
+    (
+        "floating_joint.urdf",
+        Some(5),
+        "type floating is not supported",
+    ),
+    ("infinite_collision_origin.urdf", Some(3), "non-finite"),
+    (
+        "inverted_limits.urdf",
+        Some(5),
+        "lower limit 1 must be below upper limit -1",
+    ),
+    ("joint_cycle.urdf", Some(4), "cycle"),
+    (
+        "joint_to_itself.urdf",
+        Some(4),
+        "connects link 'base' to itself",
+    ),
+    ("mesh_geometry.urdf", Some(3), "meshes are not supported"),
+    (
+        "mimic_unknown_joint.urdf",
+        Some(5),
+        "mimics joint 'elbow', which is not defined",
+    ),
+    ("missing_limit.urdf", Some(5), "a missing <limit>"),
+    (
+        "missing_parent_link.urdf",
+        Some(5),
+        "parent link 'torso' is not defined",
+    ),
+    ("nan_origin.urdf", Some(5), "non-finite"),
+    (
+        "negative_box.urdf",
+        Some(3),
+        "box size y must be a positive finite number",
+    ),
+    ("no_links.urdf", None, "has no <link>"),
+    ("not_xml.urdf", None, "not a valid URDF document"),
+    (
+        "two_parents.urdf",
+        Some(13),
+        "link 'b' has two parent joints",
+    ),
+    ("two_roots.urdf", Some(5), "not one tree"),
+    (
+        "unknown_joint_type.urdf",
+        Some(5),
+        "unknown variant `hinge`",
+    ),
+    (
+        "zero_axis.urdf",
+        Some(5),
+        "axis [0.0, 0.0, 0.0] is not a finite non-zero vector",
+    ),
+    (
+        "zero_radius_capsule.urdf",
+        Some(3),
+        "capsule radius must be a positive finite number",
+    ),
+];
+
+#[test]
+fn malformed_urdf_files_give_clear_errors() {
+    let dir = format!("{}/tests/bad_urdf", env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    let listed: Vec<&str> = BAD.iter().map(|b| b.0).collect();
+    assert_eq!(
+        files, listed,
+        "every file in tests/bad_urdf needs an expectation"
+    );
+    for &(file, line, phrase) in BAD {
+        let path = format!("{dir}/{file}");
+        let err = AgentModel::from_urdf_file(&path).unwrap_err();
+        let text = err.to_string();
+        let prefix = match line {
+            Some(l) => format!("{path}:{l}: "),
+            None => format!("{path}: "),
+        };
+        assert!(text.starts_with(&prefix), "{file}: {text}");
+        assert!(text.contains(phrase), "{file}: {text}");
+    }
+}
+
+#[test]
+fn missing_file_names_the_file() {
+    let err = AgentModel::from_urdf_file("no/such/robot.urdf").unwrap_err();
+    assert!(matches!(err, ModelError::Io { .. }));
+    assert!(
+        err.to_string()
+            .starts_with("no/such/robot.urdf: cannot read")
+    );
+}
+
+/// Truncated and corrupted versions of the real models give errors or models, never panics.
+#[test]
+fn corrupted_models_never_panic() {
+    for file in ["pr2.urdf", "human.urdf"] {
+        let text = std::fs::read_to_string(model_path(file)).unwrap();
+        let mut rng = fastrand::Rng::with_seed(9);
+        for cut in (0..text.len()).step_by(97) {
+            let _ = AgentModel::from_urdf_str(&text[..cut], file);
+        }
+        let bytes = text.as_bytes();
+        for _ in 0..200 {
+            let mut b = bytes.to_vec();
+            for _ in 0..3 {
+                let i = rng.usize(..b.len());
+                b[i] = *rng.choice(b"<>\"/= -e9.x0".iter()).unwrap();
+            }
+            if let Ok(t) = String::from_utf8(b) {
+                let _ = AgentModel::from_urdf_str(&t, file);
+            }
+        }
+    }
+}
