@@ -36,6 +36,8 @@ struct Cli {
 enum Command {
     /// Run the library-receptionist scenario end to end (the paper's domain and scene).
     Demo(cmd::demo::Args),
+    /// Benchmarks: `bench library` runs the paper's experiment (Table II).
+    Bench(cmd::bench::Args),
     /// Plan an HDDL problem (optionally with a 3D scene for geometric tasks).
     Plan(cmd::plan::Args),
     /// Check a plan in the competition format against a domain and problem.
@@ -65,6 +67,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Demo(args) => cmd::demo::run(args),
+        Command::Bench(args) => cmd::bench::run(args),
         Command::Plan(args) => cmd::plan::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::BenchHddl(args) => cmd::bench_hddl::run(args),

@@ -5,6 +5,7 @@
 //! `gtp` crate; the HTN search owns the choice points and the backtracking strategy
 //! ([`htn::planner::Strategy`]), the oracle owns the stack of geometric worlds.
 
+pub mod experiment;
 pub mod export;
 pub mod oracle;
 pub mod run;

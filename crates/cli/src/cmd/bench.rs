@@ -1,0 +1,274 @@
+//! `htngtp bench`: the paper's experiments.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use geometry::world::World;
+use htn::planner::{PlannerOptions, Strategy};
+use hybrid::experiment::{Experiment, ExperimentOptions, Randomization, run_experiment};
+use hybrid::{OracleConfig, RunOptions};
+
+use crate::cmd::demo::library_dir;
+use crate::exit;
+
+/// Arguments of `htngtp bench`.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    pub target: Target,
+}
+
+/// What to benchmark.
+#[derive(clap::Subcommand)]
+pub enum Target {
+    /// The paper's experiment (Table II): MANAGEORDER with payment by card, many runs.
+    Library(LibraryArgs),
+}
+
+/// Arguments of `htngtp bench library`.
+#[derive(clap::Args)]
+#[command(
+    long_about = "The paper's experiment (Section V, Table II): plans MANAGEORDER for a member \
+                  who must pay by card (method m7) in the variant of the library domain that \
+                  groups PICK with the GTP task after it, `--runs` times, each over a randomized \
+                  initial scene (books, POS machine and member moved and turned; `--fixed` keeps \
+                  the paper's fixed scene). Prints Table II per GTP task (mean time, success %, \
+                  points, grasps, orientations, trajectory-planner calls, means per request), \
+                  HTN backtracks per run, complete failures and the total time; writes CSV and \
+                  JSON. Runs in parallel on all cores."
+)]
+pub struct LibraryArgs {
+    /// Number of runs.
+    #[arg(long, default_value_t = 100)]
+    pub runs: usize,
+    /// Seed of the scene randomization and of every search.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Keep the initial scene fixed (the paper's setting).
+    #[arg(long)]
+    pub fixed: bool,
+    /// Backtracking strategy.
+    #[arg(long, value_enum, default_value_t = crate::cmd::plan::StrategyArg::Symbolic)]
+    pub strategy: crate::cmd::plan::StrategyArg,
+    /// With geometric-first: other geometric solutions tried per failure.
+    #[arg(long, default_value_t = 3)]
+    pub geo_alternatives: usize,
+    /// Run all three strategies on the same scenes and print them side by side.
+    #[arg(long)]
+    pub compare: bool,
+    /// Domain (default: the bundled domains/library/domain-compound.hddl).
+    #[arg(long)]
+    pub domain: Option<PathBuf>,
+    /// Problem (default: the bundled domains/library/pay-by-card.hddl).
+    #[arg(long)]
+    pub problem: Option<PathBuf>,
+    /// Scene (default: the bundled domains/library/scene.toml).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Time limit of each run, seconds.
+    #[arg(long, default_value_t = 60.0)]
+    pub time_limit: f64,
+    /// Folder for the CSV and JSON results.
+    #[arg(long, default_value = "htngtp-bench")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    match args.target {
+        Target::Library(a) => library(a),
+    }
+}
+
+fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Strategy, &'static str) {
+    use crate::cmd::plan::StrategyArg as S;
+    match arg {
+        S::Symbolic => (Strategy::Symbolic, "symbolic"),
+        S::Chronological => (Strategy::Chronological, "chronological"),
+        S::GeometricFirst => (Strategy::GeometricFirst { k }, "geometric-first"),
+    }
+}
+
+fn library(args: LibraryArgs) -> anyhow::Result<u8> {
+    if args.runs == 0 {
+        anyhow::bail!("--runs must be at least 1");
+    }
+    let dir = library_dir()?;
+    let domain_path = args
+        .domain
+        .clone()
+        .unwrap_or_else(|| dir.join("domain-compound.hddl"));
+    let problem_path = args
+        .problem
+        .clone()
+        .unwrap_or_else(|| dir.join("pay-by-card.hddl"));
+    let scene_path = args.scene.clone().unwrap_or_else(|| dir.join("scene.toml"));
+    let domain = htn::load_domain(&domain_path)?;
+    let problem = htn::load_problem(&problem_path, &domain)?;
+    let world = World::load(&scene_path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let strategies: Vec<_> = if args.compare {
+        use crate::cmd::plan::StrategyArg as S;
+        [S::Symbolic, S::Chronological, S::GeometricFirst]
+            .into_iter()
+            .map(|s| strategy(s, args.geo_alternatives))
+            .collect()
+    } else {
+        vec![strategy(args.strategy, args.geo_alternatives)]
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut results = Vec::new();
+    for (s, name) in strategies {
+        let bar = indicatif::ProgressBar::new(args.runs as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg:>16} [{bar:40}] {pos}/{len} runs {elapsed}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar.set_message(name);
+        let options = ExperimentOptions {
+            runs: args.runs,
+            seed: args.seed,
+            fixed: args.fixed,
+            randomization: Randomization::default(),
+            run: RunOptions {
+                planner: PlannerOptions {
+                    strategy: s,
+                    limits: htn::planner::Limits {
+                        time: Some(std::time::Duration::from_secs_f64(args.time_limit)),
+                        ..Default::default()
+                    },
+                    ..PlannerOptions::default()
+                },
+                oracle: OracleConfig::default(),
+            },
+        };
+        let e = run_experiment(&domain, &problem, &world, &options, name, &|| bar.inc(1));
+        bar.finish_and_clear();
+        results.push(e);
+    }
+    for e in &results {
+        print_experiment(e, args.fixed);
+        write_files(e, &args.out)?;
+    }
+    if results.len() > 1 {
+        print_comparison(&results);
+    }
+    eprintln!("results written to {}", args.out.display());
+    Ok(exit::OK)
+}
+
+/// The paper's Table II (Section V), for the side-by-side print.
+const PAPER: [(&str, f64, f64, f64, f64, f64, f64); 4] = [
+    ("MAKEACC", 18.8, 99.5, 11.0, 93.3, 644.7, 16.2),
+    ("SHOW", 13.3, 93.0, 1.0, 20.3, 406.6, 7.8),
+    ("GIVE", 10.1, 100.0, 1.0, 4.2, 94.0, 7.9),
+    ("PUTAWAY", 51.0, 48.0, 13.0, 110.3, 569.2, 17.9),
+];
+
+fn paper_row(task: &str) -> Option<&'static (&'static str, f64, f64, f64, f64, f64, f64)> {
+    let key = match task {
+        "make-accessible" | "pick-and-make-accessible" => "MAKEACC",
+        "show" | "pick-and-show" => "SHOW",
+        "give" | "pick-and-give" => "GIVE",
+        "put-away" | "pick-and-put-away" => "PUTAWAY",
+        _ => return None,
+    };
+    PAPER.iter().find(|r| r.0 == key)
+}
+
+fn print_experiment(e: &Experiment, fixed: bool) {
+    println!(
+        "\n### htngtp bench library: {} runs, strategy {}, {} scene\n",
+        e.runs.len(),
+        e.strategy,
+        if fixed { "fixed" } else { "randomized" }
+    );
+    println!(
+        "| GTP task | time (ms) | succ % | pts | grasps | orts | calls | requests | paper: time (s) | succ % | pts | grasps | orts | calls |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in e.table() {
+        let paper = paper_row(&r.task)
+            .map(|p| format!("{} | {} | {} | {} | {} | {}", p.1, p.2, p.3, p.4, p.5, p.6))
+            .unwrap_or_else(|| "- | - | - | - | - | -".into());
+        println!(
+            "| {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {} | {} |",
+            r.task,
+            r.mean_time_s * 1e3,
+            r.success_pct,
+            r.points,
+            r.grasps,
+            r.orientations,
+            r.planner_calls,
+            r.attempts,
+            paper
+        );
+    }
+    let failures = e.runs.iter().filter(|r| !r.solved).count();
+    println!(
+        "\nMANAGEORDER solved in {:.1} % of runs ({} complete failures; the paper: 99 %, 1 failure)",
+        e.success_pct(),
+        failures
+    );
+    println!(
+        "HTN backtracks per run: mean {:.2}, runs with more than 3: {:.1} % (the paper: 0.86 and slightly under 10 %)",
+        e.mean_htn_backtracks(),
+        e.share_over_3_backtracks()
+    );
+    println!(
+        "GTP backtracks per run: mean {:.2}",
+        e.runs.iter().map(|r| r.gtp_backtracks as f64).sum::<f64>() / e.runs.len().max(1) as f64
+    );
+    println!("Total wall time: {:.1} s", e.wall_time_s);
+    for r in e.runs.iter().filter(|r| !r.solved).take(5) {
+        println!("  run {} (seed {}): {}", r.index, r.seed, r.status);
+    }
+}
+
+fn print_comparison(results: &[Experiment]) {
+    println!("\n### Strategies side by side\n");
+    println!(
+        "| strategy | success % | HTN backtracks / run | GTP backtracks / run | wall time (s) |"
+    );
+    println!("|---|---:|---:|---:|---:|");
+    for e in results {
+        let n = e.runs.len().max(1) as f64;
+        println!(
+            "| {} | {:.1} | {:.2} | {:.2} | {:.1} |",
+            e.strategy,
+            e.success_pct(),
+            e.mean_htn_backtracks(),
+            e.runs.iter().map(|r| r.gtp_backtracks as f64).sum::<f64>() / n,
+            e.wall_time_s
+        );
+    }
+}
+
+fn write_files(e: &Experiment, dir: &std::path::Path) -> anyhow::Result<()> {
+    let base = dir.join(format!("library-{}", e.strategy));
+    let json = serde_json::json!({ "experiment": e, "table": e.table() });
+    std::fs::write(
+        base.with_extension("json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let mut csv = String::from(
+        "task,mean_time_ms,success_pct,points,grasps,orientations,planner_calls,requests\n",
+    );
+    for r in e.table() {
+        csv.push_str(&format!(
+            "{},{:.3},{:.2},{:.2},{:.2},{:.2},{:.2},{}\n",
+            r.task,
+            r.mean_time_s * 1e3,
+            r.success_pct,
+            r.points,
+            r.grasps,
+            r.orientations,
+            r.planner_calls,
+            r.attempts
+        ));
+    }
+    std::fs::write(base.with_extension("csv"), csv)?;
+    Ok(())
+}

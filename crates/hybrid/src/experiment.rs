@@ -1,0 +1,266 @@
+//! The paper's experiment (Section V, Table II): MANAGEORDER planned many times, with per-GTP-task
+//! statistics, HTN backtracks per run and complete failures; over randomized initial scenes
+//! (the paper kept its scene fixed and left randomization as future work).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+use geometry::world::{World, base_pose};
+use gtp::planner::Planner;
+use htn::model::{Domain, Problem};
+use htn::planner::{Outcome, PlannerOptions};
+use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::query::intersection_test;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::oracle::TaskStats;
+use crate::run::{RunOptions, plan};
+
+/// How much the initial scene is perturbed per run.
+#[derive(Clone, Copy, Debug)]
+pub struct Randomization {
+    /// Largest shift of a movable object on its support (metres, in x and y).
+    pub object_shift: f32,
+    /// Largest turn of a movable object about the vertical (radians).
+    pub object_turn: f32,
+    /// Largest shift of each human's base (metres) and turn (radians).
+    pub human_shift: f32,
+    pub human_turn: f32,
+}
+
+impl Default for Randomization {
+    fn default() -> Self {
+        Randomization {
+            object_shift: 0.05,
+            object_turn: 0.35,
+            human_shift: 0.08,
+            human_turn: 0.15,
+        }
+    }
+}
+
+/// A randomized copy of `world`: every movable object shifted and turned about the vertical
+/// where it rests (a draw that makes it touch anything but its support is drawn again, at most
+/// 20 times, else the object stays), every human's base shifted and turned.
+pub fn randomize(world: &World, r: &Randomization, seed: u64) -> World {
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut w = world.clone();
+    let mut sym = |a: f32| (rng.f32() * 2.0 - 1.0) * a;
+    for id in world.object_ids() {
+        let o = world.object(id);
+        if !o.movable || world.attachment(id).is_some() {
+            continue;
+        }
+        let start = world.object_pose(id);
+        for _ in 0..20 {
+            let shift = Vector::new(sym(r.object_shift), sym(r.object_shift), 0.0);
+            let turn = Rotation::from_rotation_z(sym(r.object_turn));
+            let pose = Pose::from_parts(start.translation + shift, turn * start.rotation);
+            w.set_object_pose(id, pose);
+            let shape_pose = w.object_shape_pose(id);
+            let touching = w.obstacles().any(|(other, shape, p)| {
+                other != id
+                    && !geometry::facts::on(&w, id, other, 0.02)
+                    && intersection_test(&shape_pose, o.shape.as_ref(), &p, shape.as_ref())
+                        .map_or(true, |i| i.intersecting)
+            });
+            if !touching {
+                break;
+            }
+            w.set_object_pose(id, start);
+        }
+    }
+    for id in world.agent_ids() {
+        if world.agent(id).kind() != geometry::scene::AgentKind::Human {
+            continue;
+        }
+        let s = world.agent_state(id);
+        let yaw = 2.0 * s.base.rotation.z.atan2(s.base.rotation.w);
+        let base = base_pose(
+            s.base.translation.x + sym(r.human_shift),
+            s.base.translation.y + sym(r.human_shift),
+            yaw + sym(r.human_turn),
+        );
+        let q = s.q.clone();
+        w.set_agent_config(id, base, &q);
+    }
+    w
+}
+
+/// One run of the experiment.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunRecord {
+    pub index: usize,
+    pub seed: u64,
+    pub solved: bool,
+    /// `solved`, `unsolvable` or `limit`, with the reason when not solved.
+    pub status: String,
+    pub htn_backtracks: u64,
+    pub gtp_backtracks: u64,
+    pub actions: usize,
+    pub time_s: f64,
+    /// Per GTP task.
+    pub tasks: BTreeMap<String, TaskStats>,
+}
+
+/// The whole experiment: its runs and their totals (the paper's Table II and run figures).
+#[derive(Clone, Debug, Serialize)]
+pub struct Experiment {
+    pub strategy: String,
+    pub runs: Vec<RunRecord>,
+    pub wall_time_s: f64,
+}
+
+/// One row of Table II.
+#[derive(Clone, Debug, Serialize)]
+pub struct TableRow {
+    pub task: String,
+    /// Mean search time per solution request, seconds.
+    pub mean_time_s: f64,
+    pub success_pct: f64,
+    /// Means per request.
+    pub points: f64,
+    pub grasps: f64,
+    pub orientations: f64,
+    pub planner_calls: f64,
+    pub attempts: u64,
+}
+
+impl Experiment {
+    /// Table II: per GTP task, over every solution request of every run.
+    pub fn table(&self) -> Vec<TableRow> {
+        let mut sum: BTreeMap<String, TaskStats> = BTreeMap::new();
+        for r in &self.runs {
+            for (k, s) in &r.tasks {
+                let e = sum.entry(k.clone()).or_default();
+                e.attempts += s.attempts;
+                e.successes += s.successes;
+                e.time_s += s.time_s + s.facts_time_s;
+                e.points += s.points;
+                e.grasps += s.grasps;
+                e.orientations += s.orientations;
+                e.planner_calls += s.planner_calls;
+            }
+        }
+        sum.into_iter()
+            .map(|(task, s)| {
+                let n = s.attempts.max(1) as f64;
+                TableRow {
+                    task,
+                    mean_time_s: s.time_s / n,
+                    success_pct: 100.0 * s.successes as f64 / n,
+                    points: s.points as f64 / n,
+                    grasps: s.grasps as f64 / n,
+                    orientations: s.orientations as f64 / n,
+                    planner_calls: s.planner_calls as f64 / n,
+                    attempts: s.attempts,
+                }
+            })
+            .collect()
+    }
+
+    /// Share of runs that found a plan, percent.
+    pub fn success_pct(&self) -> f64 {
+        100.0 * self.runs.iter().filter(|r| r.solved).count() as f64 / self.runs.len().max(1) as f64
+    }
+
+    /// Mean HTN backtracks per run.
+    pub fn mean_htn_backtracks(&self) -> f64 {
+        self.runs
+            .iter()
+            .map(|r| r.htn_backtracks as f64)
+            .sum::<f64>()
+            / self.runs.len().max(1) as f64
+    }
+
+    /// Share of runs with more than 3 HTN backtracks, percent.
+    pub fn share_over_3_backtracks(&self) -> f64 {
+        100.0 * self.runs.iter().filter(|r| r.htn_backtracks > 3).count() as f64
+            / self.runs.len().max(1) as f64
+    }
+}
+
+/// Settings of the experiment.
+#[derive(Clone, Debug)]
+pub struct ExperimentOptions {
+    pub runs: usize,
+    pub seed: u64,
+    /// Keep the scene as it is (the paper's setting) instead of randomizing it per run.
+    pub fixed: bool,
+    pub randomization: Randomization,
+    pub run: RunOptions,
+}
+
+/// Runs the experiment on all cores (one run per task of rayon's pool), calling `progress`
+/// after each run.
+pub fn run_experiment(
+    domain: &Domain,
+    problem: &Problem,
+    world: &World,
+    options: &ExperimentOptions,
+    strategy_name: &str,
+    progress: &(dyn Fn() + Sync),
+) -> Experiment {
+    let planner = Arc::new(Planner::new());
+    let start = Instant::now();
+    let runs: Vec<RunRecord> = (0..options.runs)
+        .into_par_iter()
+        .map(|i| {
+            let seed = options.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
+            let scene = if options.fixed {
+                world.clone()
+            } else {
+                randomize(world, &options.randomization, seed)
+            };
+            let mut run_options = options.run.clone();
+            run_options.oracle.seed = seed;
+            run_options.planner = PlannerOptions {
+                seed,
+                ..run_options.planner
+            };
+            let t0 = Instant::now();
+            let record = match plan(domain, problem, scene, planner.clone(), &run_options) {
+                Ok(run) => {
+                    let (solved, status, actions) = match &run.result.outcome {
+                        Outcome::Found { plan } => (true, "solved".to_string(), plan.actions.len()),
+                        Outcome::Unsolvable => {
+                            (false, format!("unsolvable: {}", run.failure_message()), 0)
+                        }
+                        Outcome::LimitReached { limit } => (false, format!("limit: {limit}"), 0),
+                    };
+                    RunRecord {
+                        index: i,
+                        seed,
+                        solved,
+                        status,
+                        htn_backtracks: run.result.stats.htn_backtracks,
+                        gtp_backtracks: run.result.stats.geo_backtracks,
+                        actions,
+                        time_s: t0.elapsed().as_secs_f64(),
+                        tasks: run.oracle.task_stats().clone().into_iter().collect(),
+                    }
+                }
+                Err(e) => RunRecord {
+                    index: i,
+                    seed,
+                    solved: false,
+                    status: format!("error: {e}"),
+                    htn_backtracks: 0,
+                    gtp_backtracks: 0,
+                    actions: 0,
+                    time_s: t0.elapsed().as_secs_f64(),
+                    tasks: BTreeMap::new(),
+                },
+            };
+            progress();
+            record
+        })
+        .collect();
+    Experiment {
+        strategy: strategy_name.to_string(),
+        runs,
+        wall_time_s: start.elapsed().as_secs_f64(),
+    }
+}
