@@ -9,8 +9,10 @@
 //!   the list of shape pairs to test for self-collision. Pairs are left out, as MoveIt's setup
 //!   assistant does for its SRDF, when their links are *adjacent* (a link and its parent, one
 //!   joint apart), when they collide in the *default* configuration (all joints at 0,
-//!   clamped into the limits), or when they collide in at least [`SelfCollisionOptions::always_fraction`]
-//!   of seeded random configurations (*always*: they overlap by construction). Built once per
+//!   clamped into the limits), when they collide in at least [`SelfCollisionOptions::always_fraction`]
+//!   of seeded random configurations (*always*: they overlap by construction), or when their
+//!   relative pose depends on at most one joint and a fine sweep of it finds no contact
+//!   (*never*: the two fingers of a gripper). Built once per
 //!   agent model; the left-out pairs and why are listed by [`SelfCollisionModel::allowed_pairs`].
 //! * [`CollisionChecker`]: the two above, the agent's base pose, and optionally a
 //!   [`HeldObject`]. Answers [`CollisionChecker::is_config_free`] (fast, early exit) and
@@ -138,6 +140,21 @@ impl StaticObstacles {
         hit
     }
 
+    /// The indices of the obstacles whose AABBs overlap `aabb`, into `out` (cleared first).
+    fn candidates(&self, aabb: &Aabb, out: &mut Vec<u32>) {
+        out.clear();
+        match &self.bvh {
+            None => out.extend(
+                self.aabbs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| aabb_overlap(aabb, b))
+                    .map(|(i, _)| i as u32),
+            ),
+            Some(bvh) => out.extend(bvh.intersect_aabb(aabb)),
+        }
+    }
+
     /// Calls `f` with every obstacle that intersects `shape` at `pose`, until `f` returns true.
     /// Returns whether `f` stopped the walk.
     fn for_each_hit(
@@ -219,6 +236,43 @@ pub enum AllowedReason {
     Default,
     /// They collide in (almost) every sampled configuration.
     Always,
+    /// Their relative pose depends on at most one joint (the two fingers of a gripper, for
+    /// example), and a sweep of that joint's whole range at [`SWEEP_STEPS`] + 1 values found no
+    /// contact, so they never collide.
+    Never,
+}
+
+/// Resolution of the sweep behind [`AllowedReason::Never`].
+pub const SWEEP_STEPS: usize = 2000;
+
+/// The degrees of freedom that move link `b` relative to link `a` (mimic joints count as
+/// their master), sorted and deduplicated.
+fn relative_dofs(model: &AgentModel, a: usize, b: usize) -> Vec<usize> {
+    let path = |mut l: usize| {
+        let mut v = vec![l];
+        while let Some(p) = model.links()[l].parent {
+            v.push(p);
+            l = p;
+        }
+        v
+    };
+    let (pa, pb) = (path(a), path(b));
+    let mut dofs = Vec::new();
+    for (p, other) in [(&pa, &pb), (&pb, &pa)] {
+        for &l in p {
+            if other.contains(&l) {
+                break; // the common ancestor
+            }
+            let j = &model.joints()[model.links()[l].parent_joint.expect("non-root")];
+            let dof = j
+                .dof
+                .or_else(|| j.mimic.and_then(|m| model.joints()[m.master].dof));
+            dofs.extend(dof);
+        }
+    }
+    dofs.sort_unstable();
+    dofs.dedup();
+    dofs
 }
 
 /// A pair of links left out of self-collision checks.
@@ -334,6 +388,34 @@ impl SelfCollisionModel {
                 if status[key(a, b)].is_none() && fraction >= options.always_fraction {
                     status[key(a, b)] = Some(AllowedReason::Always);
                 }
+            }
+        }
+        // Pairs whose relative pose depends on at most one degree of freedom: sweep it.
+        for &(a, b) in &candidate_links {
+            if status[key(a, b)].is_some() {
+                continue;
+            }
+            let dofs = relative_dofs(&model, a, b);
+            let never = match dofs.as_slice() {
+                [] => true, // rigidly connected and apart in the default configuration
+                [d] => {
+                    let limits = model.dof_limits()[*d];
+                    let (lo, hi) = if limits.is_bounded() {
+                        (limits.lower, limits.upper)
+                    } else {
+                        (-std::f32::consts::PI, std::f32::consts::PI)
+                    };
+                    let mut q = default.as_slice().to_vec();
+                    (0..=SWEEP_STEPS).all(|k| {
+                        q[*d] = lo + (hi - lo) * k as f32 / SWEEP_STEPS as f32;
+                        model.link_poses_into(Pose::IDENTITY, &q, &mut poses);
+                        !links_collide(&model, &poses, a, b)
+                    })
+                }
+                _ => false,
+            };
+            if never {
+                status[key(a, b)] = Some(AllowedReason::Never);
             }
         }
         let mut pairs = Vec::new();
@@ -534,6 +616,7 @@ struct Scratch {
     links: Vec<Pose>,
     poses: Vec<Pose>,
     aabbs: Vec<Aabb>,
+    candidates: Vec<u32>,
 }
 
 thread_local! {
@@ -683,6 +766,7 @@ impl CollisionChecker {
                 links,
                 poses,
                 aabbs,
+                candidates,
             } = &mut *guard;
             let model = &self.agent.model;
             model.link_poses_into(self.base, q, links);
@@ -694,16 +778,29 @@ impl CollisionChecker {
                 poses.push(p);
                 aabbs.push(s.shape.compute_aabb(&p));
             }
-            // Agent against the scene.
-            if !self.obstacles.is_empty() {
+            // Agent against the scene: first the obstacles near the whole agent, then per shape.
+            if !self.obstacles.is_empty() && !aabbs.is_empty() {
+                let mut all = aabbs[0];
+                for b in &aabbs[1..] {
+                    all.mins = all.mins.min(b.mins);
+                    all.maxs = all.maxs.max(b.maxs);
+                }
+                self.obstacles.candidates(&all, candidates);
                 for (i, s) in shapes.iter().enumerate() {
-                    let stop =
-                        self.obstacles
-                            .for_each_hit(&poses[i], &*s.shape.0, &aabbs[i], |o| {
-                                report(Hit::Obstacle(i, o))
-                            });
-                    if stop {
-                        return;
+                    for &o in candidates.iter() {
+                        let o = o as usize;
+                        let obstacle = &self.obstacles.obstacles[o];
+                        if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
+                            && intersects(
+                                &poses[i],
+                                &*s.shape.0,
+                                &obstacle.pose,
+                                &*obstacle.shape.0,
+                            )
+                            && report(Hit::Obstacle(i, o))
+                        {
+                            return;
+                        }
                     }
                 }
             }

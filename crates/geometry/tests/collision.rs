@@ -4,8 +4,8 @@ use std::sync::Arc;
 
 use geometry::agent::{AgentModel, human_postures};
 use geometry::collision::{
-    CollisionChecker, Contact, HeldObject, Obstacle, SelfCollisionModel, SelfCollisionOptions,
-    StaticObstacles,
+    AllowedReason, CollisionChecker, Contact, HeldObject, Obstacle, SelfCollisionModel,
+    SelfCollisionOptions, StaticObstacles,
 };
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
@@ -234,6 +234,13 @@ fn adjacent_pairs_skipped_real_pairs_checked() {
         assert!(s.is_checked(a, b).unwrap(), "{a} {b}");
     }
     assert!(s.is_checked("no_link", "base_link").is_err());
+    // The fingers move relative to each other by one joint only and never touch.
+    let fingers = s
+        .allowed_pairs()
+        .iter()
+        .find(|p| p.link_a == "r_gripper_l_finger_link" && p.link_b == "r_gripper_r_finger_link")
+        .expect("finger pair allowed");
+    assert_eq!(fingers.reason, AllowedReason::Never);
     let h = self_model("human.urdf");
     assert!(h.is_checked("torso_link", "r_upper_arm_link").unwrap());
     assert!(h.is_checked("r_hand_link", "l_hand_link").unwrap());
