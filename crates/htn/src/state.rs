@@ -121,6 +121,10 @@ pub struct State {
     trail: Vec<Change>,
     hash: u64,
     salt: u64,
+    /// Predicates whose facts never change.
+    is_static: Vec<bool>,
+    /// The facts of static predicates by (predicate, argument position, object).
+    static_index: FxMap<(u32, u32, u32), Vec<u32>>,
 }
 
 impl State {
@@ -136,7 +140,43 @@ impl State {
             trail: Vec::new(),
             hash: 0,
             salt,
+            is_static: vec![false; n_preds],
+            static_index: FxMap::default(),
         }
+    }
+
+    /// Indexes the facts of the predicates flagged static (call once the initial state is
+    /// set; static facts must not change afterwards).
+    pub fn index_static(&mut self, is_static: &[bool]) {
+        self.is_static = is_static.to_vec();
+        self.static_index.clear();
+        for (p, facts) in self.by_pred.iter().enumerate() {
+            if !is_static.get(p).copied().unwrap_or(false) {
+                continue;
+            }
+            for &f in facts {
+                for (k, &o) in self.facts.key(f)[1..].iter().enumerate() {
+                    self.static_index
+                        .entry((p as u32, k as u32, o))
+                        .or_default()
+                        .push(f);
+                }
+            }
+        }
+    }
+
+    /// Whether `pred` is static (indexed).
+    #[inline]
+    pub fn is_static(&self, pred: u32) -> bool {
+        self.is_static[pred as usize]
+    }
+
+    /// The facts of static predicate `pred` whose argument `pos` is `obj`.
+    #[inline]
+    pub fn static_facts_with(&self, pred: u32, pos: usize, obj: u32) -> &[u32] {
+        self.static_index
+            .get(&(pred, pos as u32, obj))
+            .map_or(&[], Vec::as_slice)
     }
 
     fn fact_key(&self, f: u32) -> u64 {

@@ -121,6 +121,8 @@ pub(crate) struct Compiled {
     pub root_method: u32,
     pub goal: CFormula,
     pub goal_slot_types: Vec<u32>,
+    /// Predicates no action changes.
+    pub static_preds: Vec<bool>,
 }
 
 impl Compiled {
@@ -161,6 +163,7 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
             root_method: 0,
             goal: CFormula::True,
             goal_slot_types: Vec::new(),
+            static_preds: Vec::new(),
         },
         type_ids: HashMap::new(),
         domain,
@@ -217,6 +220,8 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
     )?;
     b.c.root_method = b.c.methods.len() as u32;
     b.c.methods.push(root);
+    b.c.static_preds = static_predicates(&b.c);
+    pull_up(&mut b.c);
     for f in &problem.init {
         let p = b.pred(&f.predicate)?;
         let args = f
@@ -662,4 +667,132 @@ pub(crate) fn free_vars(f: &CFormula, out: &mut Vec<u16>) {
             num_vars(b, out);
         }
     }
+}
+
+/// Predicates no action adds or deletes (and that are not shared: geometry changes those).
+fn static_predicates(c: &Compiled) -> Vec<bool> {
+    fn mark(effs: &[CEffect], changed: &mut [bool]) {
+        for e in effs {
+            match e {
+                CEffect::Add(p, _) | CEffect::Del(p, _) => changed[*p as usize] = true,
+                CEffect::Forall(_, inner) | CEffect::When(_, inner) => mark(inner, changed),
+                CEffect::Num(..) => {}
+            }
+        }
+    }
+    let mut changed = c.shared_preds.clone();
+    for a in &c.actions {
+        mark(&a.effects, &mut changed);
+    }
+    changed.iter().map(|x| !x).collect()
+}
+
+/// Precondition pull-up: a method's precondition gains (1) the whole quantifier-free part of
+/// its first subtask's precondition when that subtask is an action (the method's precondition
+/// is evaluated in the very state that action runs in), and (2) the static literals of every
+/// other primitive subtask (static facts hold or fail for the whole plan). Both are sound and
+/// lose no plan; they prune bindings early and let the binder bind through the pulled atoms.
+fn pull_up(c: &mut Compiled) {
+    let stat = static_predicates(c);
+    let is_static = |f: &CFormula| -> bool {
+        match f {
+            CFormula::Atom(p, _) => stat[*p as usize],
+            CFormula::Eq(..) => true,
+            CFormula::Not(x) => match &**x {
+                CFormula::Atom(p, _) => stat[*p as usize],
+                CFormula::Eq(..) => true,
+                _ => false,
+            },
+            _ => false,
+        }
+    };
+    for mi in 0..c.methods.len() {
+        let mut extra: Vec<CFormula> = Vec::new();
+        for (i, (t, args)) in c.methods[mi].subtasks.iter().enumerate() {
+            let Some(a) = c.tasks[*t as usize].action else {
+                continue;
+            };
+            let act = &c.actions[a as usize];
+            if act.evaluable.is_some() && i > 0 {
+                continue;
+            }
+            for lit in &act.pre {
+                // Only literals over the action's parameters (no quantified slots).
+                if lit.vars.iter().any(|&v| v as usize >= act.n_params) || !quantifier_free(&lit.f)
+                {
+                    continue;
+                }
+                if (i == 0 || is_static(&lit.f))
+                    && let Some(f) = rename(&lit.f, args)
+                {
+                    extra.push(f);
+                }
+            }
+        }
+        if extra.is_empty() {
+            continue;
+        }
+        let m = &mut c.methods[mi];
+        for f in extra {
+            let mut vars = Vec::new();
+            free_vars(&f, &mut vars);
+            vars.sort_unstable();
+            vars.dedup();
+            m.pre.push(CLit { f, vars });
+        }
+    }
+}
+
+fn quantifier_free(f: &CFormula) -> bool {
+    match f {
+        CFormula::True | CFormula::Atom(..) | CFormula::Eq(..) | CFormula::Compare(..) => true,
+        CFormula::Not(x) => quantifier_free(x),
+        CFormula::And(xs) | CFormula::Or(xs) => xs.iter().all(quantifier_free),
+        CFormula::Imply(a, b) => quantifier_free(a) && quantifier_free(b),
+        CFormula::Exists(..) | CFormula::Forall(..) => false,
+    }
+}
+
+/// `f` over an action's parameter slots, rewritten over the method's terms `args`.
+fn rename(f: &CFormula, args: &[CTerm]) -> Option<CFormula> {
+    let t = |x: &CTerm| -> Option<CTerm> {
+        match *x {
+            CTerm::Var(v) => args.get(v as usize).copied(),
+            o => Some(o),
+        }
+    };
+    let ts = |xs: &[CTerm]| -> Option<Vec<CTerm>> { xs.iter().map(t).collect() };
+    fn num(e: &CNum, args: &[CTerm]) -> Option<CNum> {
+        Some(match e {
+            CNum::Number(x) => CNum::Number(*x),
+            CNum::Fluent(f, xs) => CNum::Fluent(
+                *f,
+                xs.iter()
+                    .map(|x| match *x {
+                        CTerm::Var(v) => args.get(v as usize).copied(),
+                        o => Some(o),
+                    })
+                    .collect::<Option<_>>()?,
+            ),
+            CNum::Bin(op, a, b) => CNum::Bin(*op, Box::new(num(a, args)?), Box::new(num(b, args)?)),
+            CNum::Neg(a) => CNum::Neg(Box::new(num(a, args)?)),
+        })
+    }
+    Some(match f {
+        CFormula::True => CFormula::True,
+        CFormula::Atom(p, xs) => CFormula::Atom(*p, ts(xs)?),
+        CFormula::Eq(a, b) => CFormula::Eq(t(a)?, t(b)?),
+        CFormula::Not(x) => CFormula::Not(Box::new(rename(x, args)?)),
+        CFormula::And(xs) => {
+            CFormula::And(xs.iter().map(|x| rename(x, args)).collect::<Option<_>>()?)
+        }
+        CFormula::Or(xs) => {
+            CFormula::Or(xs.iter().map(|x| rename(x, args)).collect::<Option<_>>()?)
+        }
+        CFormula::Imply(a, b) => {
+            CFormula::Imply(Box::new(rename(a, args)?), Box::new(rename(b, args)?))
+        }
+        CFormula::Compare(op, a, b) => CFormula::Compare(*op, num(a, args)?, num(b, args)?),
+        CFormula::Exists(..) | CFormula::Forall(..) => return None,
+    })
 }

@@ -171,27 +171,38 @@ impl Eval<'_> {
         done: &mut [bool],
         cb: &mut dyn FnMut(&[u32]) -> bool,
     ) -> bool {
-        // The positive atom with the fewest candidates.
-        let mut best: Option<(usize, usize)> = None;
+        // The positive atom with the fewest candidates (static atoms through the index).
+        let mut best: Option<(usize, &[u32])> = None;
         for (i, l) in lits.iter().enumerate() {
             if done[i] {
                 continue;
             }
-            if let CFormula::Atom(p, _) = &l.f {
-                let n = self.s.facts_of(*p).len();
-                if best.is_none_or(|(_, m)| n < m) {
-                    best = Some((i, n));
+            if let CFormula::Atom(p, args) = &l.f {
+                let mut cands = self.s.facts_of(*p);
+                if self.s.is_static(*p) {
+                    for (k, t) in args.iter().enumerate() {
+                        let o = val(t, b);
+                        if o != UNBOUND {
+                            let c = self.s.static_facts_with(*p, k, o);
+                            if c.len() < cands.len() {
+                                cands = c;
+                            }
+                        }
+                    }
+                }
+                if best.is_none_or(|(_, m)| cands.len() < m.len()) {
+                    best = Some((i, cands));
                 }
             }
         }
-        if let Some((i, _)) = best {
-            let CFormula::Atom(p, args) = &lits[i].f else {
+        if let Some((i, cands)) = best {
+            let CFormula::Atom(_, args) = &lits[i].f else {
                 unreachable!()
             };
             done[i] = true;
             let mut stop = false;
             let mut bound: [u16; 16] = [0; 16];
-            for &fid in self.s.facts_of(*p) {
+            for &fid in cands {
                 let fa = self.s.fact_args(fid);
                 let mut nb = 0;
                 let mut ok = true;

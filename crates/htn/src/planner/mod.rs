@@ -5,7 +5,11 @@
 //! method-and-binding choices of abstract tasks, and solution choices of evaluable predicates.
 //! Methods are tried in domain order, bindings in the order the binder finds them.
 //!
-//! Against endless descent: every node (state, remaining task network, geometric world) is
+//! Against endless descent, three guards. A task is not decomposed while one of its ancestors
+//! decomposes the same ground task with no action executed in between (left recursion that
+//! made no progress; as HyperTensioN's "dejavu"). This may cut off plans in contrived domains,
+//! so an exhausted search that used it is repeated without it before the problem is called
+//! unsolvable. Then, every node (state, remaining task network, geometric world) is
 //! fingerprinted and expanded at most once per search (a revisited node is either on the
 //! current path, a cycle, or already failed), and the task network's length is bounded; when
 //! the bound cut something off and no plan was found, the search restarts with the bound
@@ -115,6 +119,8 @@ pub struct SearchStats {
     pub geo_backtracks: u64,
     /// Nodes pruned because they were expanded before.
     pub revisits_pruned: u64,
+    /// Tasks pruned because an ancestor decomposes the same task with no action in between.
+    pub loops_pruned: u64,
     /// Nodes cut off by the task-network length bound.
     pub depth_cutoffs: u64,
     /// Searches run (1 + restarts with a doubled bound).

@@ -29,6 +29,8 @@ struct Cell {
     len: u32,
     /// Hash of the network from this cell down.
     hash: u64,
+    /// The decomposition (index in the tree) that created this cell, or `NIL`.
+    parent: u32,
 }
 
 struct Step {
@@ -44,6 +46,10 @@ struct TreeRec {
     method: u32,
     first: u32,
     n: u32,
+    /// The decomposition this task occurrence came from, or `NIL`.
+    parent: u32,
+    /// Actions in the plan when this decomposition was made.
+    steps: u32,
 }
 
 #[derive(Clone, Copy)]
@@ -66,6 +72,8 @@ struct HtnFrame {
     occ: u32,
     task: u32,
     rest: u32,
+    /// The decomposition the task came from.
+    parent: u32,
     /// Next position in the task's method list.
     mpos: usize,
     method: u32,
@@ -138,6 +146,8 @@ pub(crate) struct Search<'a, 'o> {
     visited: HashSet<u128, BuildHasherDefault<FxHasher>>,
     bound: usize,
     cutoff: bool,
+    /// Whether the left-recursion check is on (off in the complete fallback search).
+    loop_check: bool,
     stats: SearchStats,
     start: Instant,
     effects: EffectBuf,
@@ -175,6 +185,7 @@ impl<'a, 'o> Search<'a, 'o> {
             state.set_value(id, *v);
         }
         state.commit();
+        state.index_static(&c.static_preds);
         Ok(Search {
             c,
             opts: *opts,
@@ -190,6 +201,7 @@ impl<'a, 'o> Search<'a, 'o> {
             visited: HashSet::default(),
             bound: opts.initial_depth_bound.max(1),
             cutoff: false,
+            loop_check: true,
             stats: SearchStats::default(),
             start: Instant::now(),
             effects: EffectBuf::default(),
@@ -206,6 +218,7 @@ impl<'a, 'o> Search<'a, 'o> {
             self.stats.iterations += 1;
             self.stats.depth_bound = self.bound;
             self.cutoff = false;
+            let loops_before = self.stats.loops_pruned;
             match self.dfs()? {
                 Stop::Found => {
                     break Outcome::Found {
@@ -214,6 +227,13 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
                 Stop::Limit(l) => break Outcome::LimitReached { limit: l },
                 Stop::Exhausted => {
+                    if self.loop_check && self.stats.loops_pruned > loops_before {
+                        // The left-recursion check may have cut off the only plans: search
+                        // again without it before calling the problem unsolvable.
+                        self.loop_check = false;
+                        self.reset();
+                        continue;
+                    }
                     if !self.cutoff {
                         break Outcome::Unsolvable;
                     }
@@ -285,7 +305,7 @@ impl<'a, 'o> Search<'a, 'o> {
 
     fn dfs(&mut self) -> Result<Stop, PlanError> {
         self.top = NIL;
-        if !self.push_htn_frame(NIL, NIL, NIL)? && !self.fail()? {
+        if !self.push_htn_frame(NIL, NIL, NIL, NIL)? && !self.fail()? {
             return Ok(Stop::Exhausted);
         }
         loop {
@@ -314,13 +334,39 @@ impl<'a, 'o> Search<'a, 'o> {
                 let task = self.gtasks.key(cell.task)[0];
                 match self.c.tasks[task as usize].action {
                     Some(a) => self.expand_action(a, cell)?,
-                    None => self.push_htn_frame(cell.task, cell.occ, cell.next)?,
+                    None => {
+                        if self.loop_check && self.no_progress_repeat(cell) {
+                            self.stats.loops_pruned += 1;
+                            false
+                        } else {
+                            self.push_htn_frame(cell.task, cell.occ, cell.next, cell.parent)?
+                        }
+                    }
                 }
             };
             if !ok && !self.fail()? {
                 return Ok(Stop::Exhausted);
             }
         }
+    }
+
+    /// Whether the same ground task is being decomposed by one of its own ancestors with no
+    /// action executed since (left recursion that made no progress: the state is the same, so
+    /// the inner occurrence can only repeat what the outer one may do).
+    fn no_progress_repeat(&self, cell: Cell) -> bool {
+        let steps = self.steps.len() as u32;
+        let mut r = cell.parent;
+        while r != NIL {
+            let rec = &self.tree[r as usize];
+            if rec.steps != steps {
+                return false;
+            }
+            if rec.task == cell.task {
+                return true;
+            }
+            r = rec.parent;
+        }
+        false
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
@@ -395,7 +441,7 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
-    fn push_cell(&mut self, task: u32, occ: u32, next: u32) -> u32 {
+    fn push_cell(&mut self, task: u32, occ: u32, next: u32, parent: u32) -> u32 {
         let (len, h) = if next == NIL {
             (0, 0)
         } else {
@@ -409,6 +455,7 @@ impl<'a, 'o> Search<'a, 'o> {
             next,
             len: len + 1,
             hash,
+            parent,
         });
         (self.arena.len() - 1) as u32
     }
@@ -471,7 +518,13 @@ impl<'a, 'o> Search<'a, 'o> {
         (out, count)
     }
 
-    fn push_htn_frame(&mut self, task: u32, occ: u32, rest: u32) -> Result<bool, PlanError> {
+    fn push_htn_frame(
+        &mut self,
+        task: u32,
+        occ: u32,
+        rest: u32,
+        parent: u32,
+    ) -> Result<bool, PlanError> {
         let marks = self.marks();
         self.frames.push(Frame {
             marks,
@@ -479,6 +532,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 occ,
                 task,
                 rest,
+                parent,
                 mpos: 0,
                 method: 0,
                 stride: 0,
@@ -592,16 +646,19 @@ impl<'a, 'o> Search<'a, 'o> {
         let Kind::Htn(f) = &self.frames[top].kind else {
             unreachable!()
         };
-        let (occ, task, rest) = (f.occ, f.task, f.rest);
+        let (occ, task, rest, parent) = (f.occ, f.task, f.rest, f.parent);
         let method = &self.c.methods[m as usize];
         let first = self.next_occ;
         let n = method.subtasks.len() as u32;
+        let rec = self.tree.len() as u32;
         self.tree.push(TreeRec {
             occ,
             task,
             method: m,
             first,
             n,
+            parent,
+            steps: self.steps.len() as u32,
         });
         self.next_occ += n;
         let mut top_cell = rest;
@@ -614,7 +671,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 CTerm::Obj(o) => o,
             }));
             let gt = self.gtasks.intern(&key);
-            top_cell = self.push_cell(gt, first + i as u32, top_cell);
+            top_cell = self.push_cell(gt, first + i as u32, top_cell, rec);
         }
         self.top = top_cell;
     }
