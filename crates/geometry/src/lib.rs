@@ -7,6 +7,7 @@ pub mod effort;
 pub mod render;
 pub mod visibility;
 pub mod facts;
+pub mod mightability;
 pub mod agent;
 pub mod kinematics;
 pub mod ik;
