@@ -331,6 +331,12 @@ fn sq(e: &[f64; 6]) -> f64 {
     e.iter().map(|v| v * v).sum()
 }
 
+/// Iterations between stagnation checks.
+const STALL_WINDOW: usize = 10;
+/// An attempt stops when its squared error did not fall below this fraction of the value
+/// `STALL_WINDOW` iterations earlier.
+const STALL_GAIN: f64 = 0.9;
+
 /// One attempt of damped least squares from `x`; returns (iterations, position error,
 /// orientation error) at the end, `x` holding the last accepted values.
 fn descend(
@@ -345,9 +351,18 @@ fn descend(
     let (mut e, mut pe, mut oe) =
         evaluate(joints, goal, x, options.orientation, Some(&mut work.jac));
     let mut err = sq(&e);
+    let mut checkpoint = err;
     for it in 0..options.iterations {
         if pe <= options.position_tolerance && oe <= options.orientation_tolerance {
             return (it, pe, oe);
+        }
+        // Stagnation: less than STALL_GAIN of the error gone in STALL_WINDOW iterations means a
+        // local minimum or a joint limit; a restart is a better use of the time.
+        if it > 0 && it % STALL_WINDOW == 0 {
+            if err > checkpoint * STALL_GAIN {
+                return (it, pe, oe);
+            }
+            checkpoint = err;
         }
         // (J J^T + lambda I) y = e; dq = J^T y.
         let mut a = [[0.0f64; 6]; 6];
