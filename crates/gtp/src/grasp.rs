@@ -50,7 +50,7 @@ impl Default for GraspParams {
             approach_clearance: 0.02,
             rotations: 8,
             keep: 80,
-            min_separation: 0.01,
+            min_separation: 0.03,
             min_angle: 0.35,
             seed: 7,
         }

@@ -4,6 +4,10 @@
 pub mod grasp;
 pub mod gripper;
 pub mod placement;
+pub mod planner;
+pub mod robot;
 pub mod rrt;
+pub mod search;
+pub mod solution;
 pub mod stats;
 pub mod task;

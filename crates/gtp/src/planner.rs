@@ -1,0 +1,407 @@
+//! The planner's public face: run a task by name with string arguments on a [`World`], pull
+//! its solutions lazily ([`SolutionStream`]), read each solution's resulting world and summary,
+//! and the call's statistics.
+//!
+//! ```no_run
+//! # use gtp::planner::{Planner, CallOptions};
+//! # let world = geometry::world::World::load("domains/library/scene.toml").unwrap();
+//! let planner = Planner::new();
+//! let mut stream = planner
+//!     .run(&world, "make-accessible", &["grey-book", "member"], &CallOptions::default())
+//!     .unwrap();
+//! if let Some(solution) = stream.next() {
+//!     let after = solution.world; // the book moved, the robot back in its posture
+//!     println!("{:?}", solution.summary.placement);
+//! } else {
+//!     println!("failed: {}", stream.failure().unwrap());
+//! }
+//! println!("{:?}", stream.stats());
+//! ```
+
+use std::fmt;
+use std::sync::{Arc, Mutex, Weak};
+use std::time::Duration;
+
+use geometry::scene::{AgentId, AgentKind, ObjectId};
+use geometry::world::{World, WorldModel};
+use parry3d::math::Vector;
+use serde::{Deserialize, Serialize};
+
+use crate::grasp::{GraspCache, GraspParams};
+use crate::placement::PlacementParams;
+use crate::robot::RobotSetup;
+use crate::rrt::RrtParams;
+use crate::search::Search;
+use crate::solution::SolutionSummary;
+use crate::stats::Stats;
+use crate::task::{Constraints, TaskKind};
+
+/// Errors in a task call itself (before any search): unknown task, wrong arguments, a scene
+/// without a robot. A task that has no solution is not an error: see [`Failure`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GtpError {
+    /// The task name is not one of the known tasks.
+    #[error(
+        "unknown task `{0}` (known: pick, place-on, show, give, make-accessible, put-away, navigate-to, pick-and-make-accessible)"
+    )]
+    UnknownTask(String),
+    /// Wrong number of arguments.
+    #[error("task `{task}` takes {} argument(s) ({}), got {got}", expected.len(), expected.join(", "))]
+    Arity {
+        task: TaskKind,
+        expected: Vec<&'static str>,
+        got: usize,
+    },
+    /// An argument names nothing suitable in the world.
+    #[error("task `{task}`, argument {role} `{name}`: {reason}")]
+    BadArgument {
+        task: TaskKind,
+        role: &'static str,
+        name: String,
+        reason: String,
+    },
+    /// A constraint override is malformed.
+    #[error("constraint: {0}")]
+    Constraint(String),
+    /// The world cannot be planned in (no robot, no arm, an object that cannot be grasped).
+    #[error("{0}")]
+    Setup(String),
+}
+
+/// A task with its arguments resolved in a world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Task {
+    /// Which task.
+    pub kind: TaskKind,
+    /// The arguments as given.
+    pub args: Vec<String>,
+    /// The object moved (all tasks but navigate-to).
+    pub object: Option<ObjectId>,
+    /// The support (place-on).
+    pub support: Option<ObjectId>,
+    /// The human concerned (show, give, make-accessible, put-away).
+    pub human: Option<AgentId>,
+    /// The point to reach (navigate-to: the target object's or agent's centre).
+    pub target_point: Option<Vector>,
+}
+
+impl Task {
+    /// Resolves `name(args...)` in `world`.
+    pub fn resolve(world: &World, name: &str, args: &[&str]) -> Result<Task, GtpError> {
+        let kind = TaskKind::from_name(name).ok_or_else(|| GtpError::UnknownTask(name.into()))?;
+        let roles = kind.parameters();
+        if args.len() != roles.len() {
+            return Err(GtpError::Arity {
+                task: kind,
+                expected: roles.to_vec(),
+                got: args.len(),
+            });
+        }
+        let objects = || {
+            world
+                .object_ids()
+                .map(|o| world.object(o).name.clone())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let bad = |role: &'static str, name: &str, reason: String| GtpError::BadArgument {
+            task: kind,
+            role,
+            name: name.to_string(),
+            reason,
+        };
+        let mut task = Task {
+            kind,
+            args: args.iter().map(|s| s.to_string()).collect(),
+            object: None,
+            support: None,
+            human: None,
+            target_point: None,
+        };
+        for (role, name) in roles.iter().zip(args) {
+            match *role {
+                "object" => {
+                    let id = world.object_id(name).ok_or_else(|| {
+                        bad(
+                            role,
+                            name,
+                            format!("no such object (objects: {})", objects()),
+                        )
+                    })?;
+                    if !world.object(id).movable {
+                        return Err(bad(role, name, "the object is not movable".into()));
+                    }
+                    task.object = Some(id);
+                }
+                "support" => {
+                    let id = world.object_id(name).ok_or_else(|| {
+                        bad(
+                            role,
+                            name,
+                            format!("no such object (objects: {})", objects()),
+                        )
+                    })?;
+                    if world.object(id).surfaces.is_empty() {
+                        return Err(bad(role, name, "the object has no support surface".into()));
+                    }
+                    task.support = Some(id);
+                }
+                "human" => {
+                    let id = world.agent_id(name).ok_or_else(|| {
+                        let humans: Vec<String> = world
+                            .agent_ids()
+                            .filter(|&a| world.agent(a).kind() == AgentKind::Human)
+                            .map(|a| world.agent(a).name().to_string())
+                            .collect();
+                        bad(
+                            role,
+                            name,
+                            format!("no such agent (humans: {})", humans.join(", ")),
+                        )
+                    })?;
+                    if world.agent(id).kind() != AgentKind::Human {
+                        return Err(bad(role, name, "the agent is not a human".into()));
+                    }
+                    task.human = Some(id);
+                }
+                _ => {
+                    // navigate-to: an object or an agent.
+                    if let Some(id) = world.object_id(name) {
+                        task.target_point = Some(world.object_aabb(id).center());
+                    } else if let Some(a) = world.agent_id(name) {
+                        task.target_point = Some(world.eye_pose(a).translation);
+                    } else {
+                        return Err(bad(
+                            role,
+                            name,
+                            format!("no object or agent of that name (objects: {})", objects()),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(task)
+    }
+}
+
+/// Why a task call produced no (further) solution: which constraint stopped it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Failure {
+    /// The constraint (or stage) that rejected the last candidates: `candidate-points`, `pick`,
+    /// `object-collision`, `gripper-collision`, `inverse-kinematics`, `reachability`,
+    /// `visibility`, `trajectory`, `grasp`, or `time-limit`.
+    pub constraint: String,
+    /// In words, with the best value reached where it helps ("best visibility 0.31").
+    pub message: String,
+    /// Whether a limit (time) stopped the search rather than exhaustion.
+    pub limit: bool,
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} ({})", self.message, self.constraint)
+    }
+}
+
+/// One solution: the world after it, and what it says.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// The world after the task: the object moved (and held, for pick, show and give), the
+    /// robot's arm where the task left it.
+    pub world: World,
+    /// Grasp, placement, visibility, trajectories and statistics, serialisable.
+    pub summary: SolutionSummary,
+}
+
+/// Options of one task call.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CallOptions {
+    /// Seed of every random choice (IK restarts, RRT samples).
+    pub seed: u64,
+    /// Threshold overrides, `(name, value)` as [`Constraints::set`] takes them.
+    pub constraints: Vec<(String, String)>,
+}
+
+impl Default for CallOptions {
+    fn default() -> Self {
+        CallOptions {
+            seed: 1,
+            constraints: Vec::new(),
+        }
+    }
+}
+
+impl CallOptions {
+    /// Default options with this seed.
+    pub fn seeded(seed: u64) -> CallOptions {
+        CallOptions {
+            seed,
+            ..CallOptions::default()
+        }
+    }
+
+    /// Adds a threshold override.
+    pub fn with(mut self, key: &str, value: &str) -> CallOptions {
+        self.constraints.push((key.into(), value.into()));
+        self
+    }
+}
+
+/// Settings shared by every call of a planner.
+#[derive(Clone, Debug)]
+pub struct PlannerConfig {
+    /// Grasps per object shape (shared cache).
+    pub grasps: GraspCache,
+    /// Placement enumeration.
+    pub placement: PlacementParams,
+    /// RRT-Connect limits and resolution.
+    pub rrt: RrtParams,
+    /// Inverse-kinematics attempts (random restarts inside the solver) per call.
+    pub ik_attempts: usize,
+    /// Calls per target (from the current configuration, then from random ones) until one
+    /// gives a collision-free solution.
+    pub ik_tries: usize,
+    /// Pixel-visibility grid (rays per side).
+    pub visibility_resolution: usize,
+    /// Print every rejected candidate to stderr (for debugging a scene).
+    pub trace: bool,
+}
+
+impl Default for PlannerConfig {
+    fn default() -> Self {
+        PlannerConfig {
+            grasps: GraspCache::new(GraspParams::default()),
+            placement: PlacementParams::default(),
+            rrt: RrtParams::default(),
+            ik_attempts: 4,
+            ik_tries: 4,
+            visibility_resolution: 32,
+            trace: std::env::var_os("GTP_TRACE").is_some(),
+        }
+    }
+}
+
+/// The geometric task planner. Keeps what depends only on the scene (grasp sets, the robot's
+/// self-collision model) between calls; `Send + Sync`, cheap to share behind an `Arc`.
+#[derive(Debug, Default)]
+pub struct Planner {
+    config: PlannerConfig,
+    setups: Mutex<Vec<(Weak<WorldModel>, Arc<RobotSetup>)>>,
+}
+
+impl Planner {
+    /// A planner with the default settings.
+    pub fn new() -> Planner {
+        Planner::default()
+    }
+
+    /// A planner with these settings.
+    pub fn with_config(config: PlannerConfig) -> Planner {
+        Planner {
+            config,
+            setups: Mutex::default(),
+        }
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &PlannerConfig {
+        &self.config
+    }
+
+    /// The robot of the world's scene (built on first use per scene, then shared).
+    pub fn robot(&self, world: &World) -> Result<Arc<RobotSetup>, GtpError> {
+        let mut setups = self.setups.lock().unwrap_or_else(|e| e.into_inner());
+        setups.retain(|(w, _)| w.strong_count() > 0);
+        if let Some((_, s)) = setups
+            .iter()
+            .find(|(w, _)| std::ptr::eq(w.as_ptr(), Arc::as_ptr(world.model())))
+        {
+            return Ok(s.clone());
+        }
+        let setup = Arc::new(RobotSetup::new(world).map_err(GtpError::Setup)?);
+        setups.push((Arc::downgrade(world.model()), setup.clone()));
+        Ok(setup)
+    }
+
+    /// Runs task `name` with arguments `args` (object and agent names) on `world`. The search
+    /// starts lazily: pull solutions from the stream.
+    pub fn run(
+        &self,
+        world: &World,
+        name: &str,
+        args: &[&str],
+        options: &CallOptions,
+    ) -> Result<SolutionStream, GtpError> {
+        let task = Task::resolve(world, name, args)?;
+        self.solve(world, task, options)
+    }
+
+    /// Runs a resolved task.
+    pub fn solve(
+        &self,
+        world: &World,
+        task: Task,
+        options: &CallOptions,
+    ) -> Result<SolutionStream, GtpError> {
+        let mut constraints = Constraints::defaults(task.kind);
+        for (k, v) in &options.constraints {
+            constraints.set(k, v).map_err(GtpError::Constraint)?;
+        }
+        let setup = self.robot(world)?;
+        let search = Search::new(
+            self.config.clone(),
+            setup,
+            world.clone(),
+            task.clone(),
+            constraints.clone(),
+            options.seed,
+        )
+        .map_err(GtpError::Setup)?;
+        Ok(SolutionStream {
+            task,
+            constraints,
+            search,
+        })
+    }
+}
+
+/// The solutions of one task call, produced lazily: the first, then on request the next
+/// different one (another point, grasp or orientation).
+pub struct SolutionStream {
+    task: Task,
+    constraints: Constraints,
+    search: Search,
+}
+
+impl SolutionStream {
+    /// The task being solved.
+    pub fn task(&self) -> &Task {
+        &self.task
+    }
+
+    /// The thresholds in force.
+    pub fn constraints(&self) -> &Constraints {
+        &self.constraints
+    }
+
+    /// The statistics so far (cumulative over every solution pulled).
+    pub fn stats(&self) -> Stats {
+        self.search.stats
+    }
+
+    /// Why the stream ended, once it has.
+    pub fn failure(&self) -> Option<&Failure> {
+        self.search.failure.as_ref()
+    }
+}
+
+impl Iterator for SolutionStream {
+    type Item = Solution;
+
+    fn next(&mut self) -> Option<Solution> {
+        self.search.next_solution()
+    }
+}
+
+/// How long the default call may run.
+pub const DEFAULT_TIME_LIMIT: Duration = Duration::from_secs(60);

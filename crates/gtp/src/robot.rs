@@ -1,0 +1,354 @@
+//! The robot as the task planner drives it: its arms (kinematic chain, tool frame, gripper
+//! joint, joint space) and the motions it makes — inverse kinematics, straight Cartesian moves
+//! of the tool, and RRT-Connect between configurations — all checked for collisions with the
+//! `geometry` crate's checker.
+
+use std::sync::Arc;
+
+use geometry::agent::{AgentModel, KinematicChain};
+use geometry::collision::{
+    CollisionChecker, HeldObject, Obstacle, SelfCollisionModel, SelfCollisionOptions,
+    StaticObstacles, agent_obstacles,
+};
+use geometry::ik::{IkOptions, solve_ik};
+use geometry::scene::{AgentId, AgentKind, ObjectId};
+use geometry::world::World;
+use parry3d::math::{Pose, Vector};
+
+use crate::rrt::{self, JointPath, JointSpace, RrtParams};
+
+/// One arm of the robot.
+#[derive(Clone, Debug)]
+pub struct Arm {
+    /// The chain's name (`right_arm`, `left_arm`).
+    pub name: String,
+    /// From the torso to the tool frame.
+    pub chain: KinematicChain,
+    /// The tool frame link (objects are attached to it).
+    pub tool_link: usize,
+    /// Its name.
+    pub tool_link_name: String,
+    /// The configuration index of the gripper's finger joint (each finger's travel: half the
+    /// jaw opening), if the model has one.
+    pub gripper_dof: Option<usize>,
+    /// Joint space of the chain's movable joints.
+    pub space: JointSpace,
+    /// Names of those joints.
+    pub joint_names: Vec<String>,
+}
+
+/// What the planner knows of the robot of a scene; built once per scene and shared.
+#[derive(Debug)]
+pub struct RobotSetup {
+    /// The robot agent.
+    pub agent: AgentId,
+    /// Its model.
+    pub model: Arc<AgentModel>,
+    /// Its self-collision pairs.
+    pub self_model: Arc<SelfCollisionModel>,
+    /// Its arms, the preferred first.
+    pub arms: Vec<Arm>,
+}
+
+impl RobotSetup {
+    /// The first robot agent of the world, with the arms named `right_arm` and `left_arm`.
+    pub fn new(world: &World) -> Result<RobotSetup, String> {
+        let agent = world
+            .agent_ids()
+            .find(|&a| world.agent(a).kind() == AgentKind::Robot)
+            .ok_or("the scene has no robot agent")?;
+        let model = world.agent(agent).model.clone();
+        let self_model = Arc::new(SelfCollisionModel::new(
+            model.clone(),
+            &SelfCollisionOptions::default(),
+        ));
+        let mut arms = Vec::new();
+        for name in ["right_arm", "left_arm"] {
+            let Ok(chain) = model.chain(name) else {
+                continue;
+            };
+            let tool_link = chain.tip_link;
+            let palm = model.geometric_ancestor(tool_link).unwrap_or(tool_link);
+            let gripper_dof = (0..model.dof()).find(|&k| {
+                let j = &model.joints()[model.dof_joint(k)];
+                !chain.dofs.contains(&k) && j.mimic.is_none() && model.is_descendant(j.child, palm)
+            });
+            let limits = model.dof_limits();
+            let space = JointSpace::new(
+                &chain
+                    .dofs
+                    .iter()
+                    .map(|&k| (limits[k].lower, limits[k].upper, !limits[k].is_bounded()))
+                    .collect::<Vec<_>>(),
+            );
+            let joint_names = chain
+                .dofs
+                .iter()
+                .map(|&k| model.dof_names()[k].clone())
+                .collect();
+            arms.push(Arm {
+                name: name.to_string(),
+                tool_link_name: model.links()[tool_link].name.clone(),
+                chain,
+                tool_link,
+                gripper_dof,
+                space,
+                joint_names,
+            });
+        }
+        if arms.is_empty() {
+            return Err(format!(
+                "robot `{}` has no arm chain (right_arm or left_arm)",
+                world.agent(agent).name()
+            ));
+        }
+        Ok(RobotSetup {
+            agent,
+            model,
+            self_model,
+            arms,
+        })
+    }
+}
+
+/// The obstacles of `world` for the robot: every object not held (except those in `skip`), and
+/// the collision shapes of every other agent.
+pub fn obstacles(world: &World, robot: AgentId, skip: &[ObjectId]) -> StaticObstacles {
+    let mut list: Vec<Obstacle> = world
+        .obstacles()
+        .filter(|(id, _, _)| !skip.contains(id))
+        .map(|(id, shape, pose)| Obstacle {
+            name: world.object(id).name.clone(),
+            pose,
+            shape: shape.clone(),
+        })
+        .collect();
+    for a in world.agent_ids() {
+        if a == robot {
+            continue;
+        }
+        let st = world.agent_state(a);
+        let info = world.agent(a);
+        list.extend(agent_obstacles(&info.model, st.base, &st.q, info.name()));
+    }
+    StaticObstacles::new(list)
+}
+
+/// The arm's values within a full configuration.
+pub fn arm_values(arm: &Arm, q: &[f32]) -> Vec<f32> {
+    arm.chain.dofs.iter().map(|&k| q[k]).collect()
+}
+
+/// Writes arm values into a full configuration.
+pub fn set_arm_values(arm: &Arm, q: &mut [f32], values: &[f32]) {
+    for (i, &k) in arm.chain.dofs.iter().enumerate() {
+        q[k] = values[i];
+    }
+}
+
+/// Sets the gripper's finger joint for a jaw opening (clamped to the joint's limits).
+pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
+    if let Some(k) = arm.gripper_dof {
+        q[k] = model.dof_limits()[k].clamp(opening / 2.0);
+    }
+}
+
+/// A held object for collision checks: `object` attached to the arm's tool frame at `grasp`
+/// (the object's shape pose in the tool frame).
+pub fn held_object(
+    world: &World,
+    setup: &RobotSetup,
+    arm: &Arm,
+    object: ObjectId,
+    object_in_tool: Pose,
+) -> Result<HeldObject, String> {
+    let o = world.object(object);
+    HeldObject::new(
+        &setup.model,
+        &o.name,
+        o.shape.clone(),
+        &arm.tool_link_name,
+        object_in_tool * o.shape_offset,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// Motion planning for one arm against one set of obstacles (and optionally a held object).
+pub struct ArmMotion<'a> {
+    pub setup: &'a RobotSetup,
+    pub arm: &'a Arm,
+    pub checker: CollisionChecker,
+    /// The full configuration whose arm values are replaced (torso, head, gripper kept).
+    pub template: Vec<f32>,
+    pub base: Pose,
+}
+
+impl<'a> ArmMotion<'a> {
+    /// A motion planner for `arm` among `obstacles`, holding `held`, with the other joints as in
+    /// `template`.
+    pub fn new(
+        setup: &'a RobotSetup,
+        arm: &'a Arm,
+        obstacles: Arc<StaticObstacles>,
+        held: Option<HeldObject>,
+        base: Pose,
+        template: Vec<f32>,
+    ) -> ArmMotion<'a> {
+        let mut checker = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
+        checker.set_held_object(held);
+        ArmMotion {
+            setup,
+            arm,
+            checker,
+            template,
+            base,
+        }
+    }
+
+    /// Whether the arm values `qa` are collision-free.
+    pub fn free(&self, qa: &[f32]) -> bool {
+        let mut q = self.template.clone();
+        set_arm_values(self.arm, &mut q, qa);
+        self.checker.is_config_free(&q)
+    }
+
+    /// The first collision at arm values `qa`, in words (for failure reports).
+    pub fn collision(&self, qa: &[f32]) -> Option<String> {
+        let mut q = self.template.clone();
+        set_arm_values(self.arm, &mut q, qa);
+        self.checker.first_collision(&q).map(|c| c.to_string())
+    }
+
+    /// The full configuration for arm values `qa`.
+    pub fn full(&self, qa: &[f32]) -> Vec<f32> {
+        let mut q = self.template.clone();
+        set_arm_values(self.arm, &mut q, qa);
+        q
+    }
+
+    /// World pose of the tool frame for arm values `qa`.
+    pub fn tool_pose(&self, qa: &[f32]) -> Pose {
+        self.setup
+            .model
+            .link_pose_by_id(self.base, &self.full(qa), self.arm.tool_link)
+    }
+
+    /// Inverse kinematics of the tool frame to `target`, seeded at arm values `seed`;
+    /// `attempts` restarts at most. The solution is not collision-checked.
+    pub fn ik(
+        &self,
+        target: Pose,
+        seed: &[f32],
+        attempts: usize,
+        rng: &mut fastrand::Rng,
+    ) -> Option<Vec<f32>> {
+        let opts = IkOptions {
+            attempts,
+            iterations: 60,
+            position_tolerance: 1e-3,
+            orientation_tolerance: 1e-2,
+            orientation: true,
+        };
+        let q = self.full(seed);
+        solve_ik(
+            &self.setup.model,
+            &self.arm.chain,
+            self.base,
+            &q,
+            target,
+            &opts,
+            rng,
+        )
+        .ok()
+        .map(|s| arm_values(self.arm, &s.configuration))
+    }
+
+    /// Inverse kinematics whose solution is also collision-free (and passes `extra`): the
+    /// first try from `seed`, the next ones from random arm configurations, `tries` in all.
+    pub fn ik_free(
+        &self,
+        target: Pose,
+        seed: &[f32],
+        tries: usize,
+        attempts: usize,
+        extra: &dyn Fn(&[f32]) -> bool,
+        rng: &mut fastrand::Rng,
+    ) -> Result<Vec<f32>, Option<String>> {
+        let mut last = None;
+        let mut start = seed.to_vec();
+        for t in 0..tries.max(1) {
+            if t > 0 {
+                self.arm.space.sample(rng, &mut start);
+            }
+            let Some(q) = self.ik(target, &start, attempts, rng) else {
+                continue;
+            };
+            match self.collision(&q) {
+                None if extra(&q) => return Ok(q),
+                None => last = Some("an extra check failed".to_string()),
+                Some(c) => last = Some(c),
+            }
+        }
+        Err(last)
+    }
+
+    /// A straight move of the tool from its pose at `from` by `offset` (world frame), in
+    /// `steps` inverse-kinematics steps seeded one from the other; every edge checked at the
+    /// certification resolution. `extra` is an additional validity check on the arm values (the
+    /// gripper against the object it straddles, for example). The error says what failed.
+    #[allow(clippy::too_many_arguments)]
+    pub fn straight(
+        &self,
+        from: &[f32],
+        offset: Vector,
+        steps: usize,
+        params: &RrtParams,
+        extra: &dyn Fn(&[f32]) -> bool,
+        rng: &mut fastrand::Rng,
+        checks: &mut usize,
+    ) -> Result<JointPath, String> {
+        let start = self.tool_pose(from);
+        let mut waypoints = vec![from.to_vec()];
+        let fine = params.resolution / params.certify_factor.max(1) as f32;
+        for s in 1..=steps {
+            let t = s as f32 / steps as f32;
+            let target = Pose::from_parts(start.translation + offset * t, start.rotation);
+            let prev = waypoints.last().unwrap().clone();
+            let q = self
+                .ik(target, &prev, 1, rng)
+                .ok_or_else(|| "inverse kinematics fails along the way".to_string())?;
+            // A jump between neighbouring steps means another IK branch: not a straight move.
+            if self.arm.space.max_delta(&prev, &q) > 0.6 {
+                return Err("the arm would have to swing round".into());
+            }
+            let mut bad = None;
+            let mut valid = |qa: &[f32]| {
+                if let Some(c) = self.collision(qa) {
+                    bad = Some(c);
+                    false
+                } else if !extra(qa) {
+                    bad = Some("the gripper touches the object".into());
+                    false
+                } else {
+                    true
+                }
+            };
+            if !rrt::edge_valid(&self.arm.space, &prev, &q, fine, &mut valid, checks) {
+                return Err(bad.unwrap_or_default());
+            }
+            waypoints.push(q);
+        }
+        Ok(JointPath { waypoints })
+    }
+
+    /// RRT-Connect from `from` to `to` (arm values).
+    pub fn plan(
+        &self,
+        from: &[f32],
+        to: &[f32],
+        params: &RrtParams,
+        rng: &mut fastrand::Rng,
+    ) -> Result<(JointPath, rrt::RrtStats), rrt::RrtError> {
+        rrt::plan(&self.arm.space, from, to, |qa| self.free(qa), params, rng).map_err(|(e, _)| e)
+    }
+}

@@ -1,0 +1,1690 @@
+//! The task search, as in the paper: effort levels, then candidate points, then grasps, then
+//! orientations; the cheap constraints first and pixel visibility last; failures remembered
+//! across effort levels; the chosen tuple confirmed by collision-free trajectories.
+//!
+//! The search is a resumable cursor over (level, point, grasp, orientation): each call of
+//! [`Search::next_solution`] continues where the previous solution was found, so successive
+//! solutions differ in at least one of point, grasp or orientation.
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+use std::time::Instant;
+
+use geometry::collision::StaticObstacles;
+use geometry::effort;
+use geometry::scene::{AgentId, ObjectId};
+use geometry::visibility::{self, Aim};
+use geometry::world::World;
+use parry3d::bounding_volume::BoundingVolume;
+use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::query::Ray;
+use parry3d::shape::{Cuboid, Shape};
+
+use crate::grasp::Grasp;
+use crate::gripper::Gripper;
+use crate::placement::{self, RestingFace};
+use crate::planner::{Failure, PlannerConfig, Solution, Task};
+use crate::robot::{self, ArmMotion, RobotSetup, set_opening};
+use crate::rrt::JointPath;
+use crate::solution::{
+    GraspRecord, HeldRecord, Phase, PlacementRecord, SolutionSummary, Trajectory,
+};
+use crate::stats::Stats;
+use crate::task::{Constraints, TaskKind};
+
+/// How far a stage of the funnel got, for the failure report (later stages are deeper).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+enum Stage {
+    Points,
+    Pick,
+    ObjectCollision,
+    Gripper,
+    Ik,
+    Reach,
+    Visibility,
+    Trajectory,
+}
+
+/// A grasp choice: an arm and a grasp (object frame), or the grasp the robot already holds.
+#[derive(Clone, Copy, Debug)]
+struct Choice {
+    arm: usize,
+    grasp: Grasp,
+    /// Tool frame in the object's frame.
+    tool_in_object: Pose,
+}
+
+/// The pick part of a plan, computed once per choice and reused across points.
+#[derive(Clone, Debug)]
+struct PickPlan {
+    approach: JointPath,
+    grasp: JointPath,
+    lift: Vec<(JointPath, Vec<String>)>,
+    /// Arm values after the lift.
+    q_lift: Vec<f32>,
+}
+
+/// A candidate orientation at a point: the object's pose there.
+#[derive(Clone, Copy, Debug)]
+struct Orientation {
+    pose: Pose,
+    face: usize,
+    yaw_index: usize,
+}
+
+pub(crate) struct Search {
+    cfg: PlannerConfig,
+    setup: Arc<RobotSetup>,
+    world: World,
+    task: Task,
+    c: Constraints,
+    rng: fastrand::Rng,
+    pub(crate) stats: Stats,
+    started: Option<Instant>,
+    elapsed: std::time::Duration,
+    object: Option<ObjectId>,
+    human: Option<AgentId>,
+    /// Arm values of the robot at the start.
+    q0_full: Vec<f32>,
+    obstacles_all: Arc<StaticObstacles>,
+    obstacles_wo: Arc<StaticObstacles>,
+    /// Obstacles the object touches where it rests (left unchecked at the start of the lift).
+    resting_on: Vec<String>,
+    faces: Vec<RestingFace>,
+    choices: Vec<Choice>,
+    held: bool,
+    levels: Vec<u8>,
+    li: usize,
+    points: Option<Vec<Vector>>,
+    pi: usize,
+    tried_points: HashSet<(i32, i32, i32)>,
+    orientations: Option<Vec<Orientation>>,
+    ci: usize,
+    choice_ready: bool,
+    oi: usize,
+    failed_choices: HashSet<usize>,
+    pick_cache: HashMap<usize, Option<PickPlan>>,
+    /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
+    human_shoulders: HashMap<u8, Vec<Vector>>,
+    deepest: Option<Stage>,
+    rejections: HashMap<Stage, usize>,
+    best_visibility: Option<f32>,
+    last_reason: String,
+    pub(crate) failure: Option<Failure>,
+    done: bool,
+}
+
+const STRAIGHT_STEPS: usize = 3;
+/// Lift height during which the object may still touch what it rested on.
+const UNSTICK: f32 = 0.02;
+
+impl Search {
+    pub(crate) fn new(
+        cfg: PlannerConfig,
+        setup: Arc<RobotSetup>,
+        world: World,
+        task: Task,
+        c: Constraints,
+        seed: u64,
+    ) -> Result<Search, String> {
+        let robot = setup.agent;
+        let object = task.object;
+        let skip: Vec<ObjectId> = object.into_iter().collect();
+        let obstacles_all = Arc::new(robot::obstacles(&world, robot, &[]));
+        let obstacles_wo = Arc::new(robot::obstacles(&world, robot, &skip));
+        let q0_full = world.agent_state(robot).q.clone();
+        let mut faces = Vec::new();
+        let mut choices = Vec::new();
+        let mut held = false;
+        let mut resting_on = Vec::new();
+        if let Some(o) = object {
+            let model = world.object(o);
+            if !model.movable && task.kind != TaskKind::NavigateTo {
+                return Err(format!("object `{}` is not movable", model.name));
+            }
+            if let Some(att) = world.attachment(o) {
+                if att.agent != robot {
+                    return Err(format!(
+                        "object `{}` is held by {}",
+                        model.name,
+                        world.agent(att.agent).name()
+                    ));
+                }
+                let arm = setup
+                    .arms
+                    .iter()
+                    .position(|a| a.tool_link == att.link)
+                    .ok_or_else(|| {
+                        format!(
+                            "object `{}` is held by a link that is no arm's tool",
+                            model.name
+                        )
+                    })?;
+                held = true;
+                let tool_in_object = att.grasp.inverse();
+                let width = model
+                    .local_aabb
+                    .half_extents()
+                    .min_element()
+                    .min(crate::gripper::MAX_OPENING / 2.0)
+                    * 2.0;
+                choices.push(Choice {
+                    arm,
+                    grasp: Grasp {
+                        id: usize::MAX,
+                        tool_in_object,
+                        width,
+                        opening: (width + 0.02).min(crate::gripper::MAX_OPENING),
+                        score: 0.0,
+                    },
+                    tool_in_object,
+                });
+            } else if task.kind != TaskKind::NavigateTo {
+                let set = cfg
+                    .grasps
+                    .grasps(&*model.shape)
+                    .map_err(|e| e.to_string())?;
+                for (ai, _) in setup.arms.iter().enumerate() {
+                    for g in &set.grasps {
+                        choices.push(Choice {
+                            arm: ai,
+                            grasp: *g,
+                            tool_in_object: model.shape_offset * g.tool_in_object,
+                        });
+                    }
+                }
+                let pose = world.object_shape_pose(o);
+                let aabb = model.shape.compute_aabb(&pose).loosened(0.002);
+                for ob in obstacles_wo.obstacles() {
+                    let hit = parry3d::query::intersection_test(
+                        &pose,
+                        &*model.shape,
+                        &ob.pose,
+                        &*ob.shape,
+                    )
+                    .map(|h| h.intersecting)
+                    .unwrap_or(true);
+                    let near = ob.shape.compute_aabb(&ob.pose).intersects(&aabb);
+                    if hit || (near && touching(&*model.shape, &pose, &*ob.shape, &ob.pose)) {
+                        resting_on.push(ob.name.clone());
+                    }
+                }
+            }
+            if task.kind != TaskKind::NavigateTo {
+                faces = placement::resting_faces(&*model.shape, &cfg.placement)
+                    .map_err(|e| e.to_string())?;
+            }
+        }
+        let levels: Vec<u8> = match task.kind {
+            TaskKind::Pick | TaskKind::PlaceOn | TaskKind::NavigateTo => vec![0],
+            _ => (0..=c.max_effort).collect(),
+        };
+        Ok(Search {
+            cfg,
+            setup,
+            human: task.human,
+            world,
+            task,
+            c,
+            rng: fastrand::Rng::with_seed(seed),
+            stats: Stats::default(),
+            started: None,
+            elapsed: Default::default(),
+            object,
+            q0_full,
+            obstacles_all,
+            obstacles_wo,
+            resting_on,
+            faces,
+            choices,
+            held,
+            levels,
+            li: 0,
+            points: None,
+            pi: 0,
+            tried_points: HashSet::new(),
+            orientations: None,
+            ci: 0,
+            choice_ready: false,
+            oi: 0,
+            failed_choices: HashSet::new(),
+            pick_cache: HashMap::new(),
+            human_shoulders: HashMap::new(),
+            deepest: None,
+            rejections: HashMap::new(),
+            best_visibility: None,
+            last_reason: String::new(),
+            failure: None,
+            done: false,
+        })
+    }
+
+    fn reject(&mut self, stage: Stage, reason: impl FnOnce() -> String) {
+        *self.rejections.entry(stage).or_default() += 1;
+        if self.cfg.trace {
+            let r = reason();
+            eprintln!("reject {stage:?}: {r}");
+            if self.deepest.is_none_or(|d| stage >= d) {
+                self.deepest = Some(stage);
+                self.last_reason = r;
+            }
+            return;
+        }
+        if self.deepest.is_none_or(|d| stage >= d) {
+            self.deepest = Some(stage);
+            self.last_reason = reason();
+        }
+    }
+
+    /// The next solution, or `None` when the search is exhausted or hit its time limit
+    /// ([`Search::failure`] then says why).
+    pub(crate) fn next_solution(&mut self) -> Option<Solution> {
+        if self.done {
+            return None;
+        }
+        let began = Instant::now();
+        self.started.get_or_insert(began);
+        let out = if self.task.kind == TaskKind::NavigateTo {
+            self.next_navigation()
+        } else {
+            self.next_tuple()
+        };
+        self.elapsed += began.elapsed();
+        self.stats.time_s = self.elapsed.as_secs_f64();
+        self.stats.success = out.is_some();
+        if out.is_some() {
+            self.stats.solutions += 1;
+        }
+        match out {
+            Some(mut s) => {
+                s.summary.stats = self.stats;
+                s.summary.index = self.stats.solutions - 1;
+                Some(s)
+            }
+            None => {
+                self.done = true;
+                if self.failure.is_none() {
+                    self.failure = Some(self.explain());
+                }
+                None
+            }
+        }
+    }
+
+    fn out_of_time(&self, began: Instant) -> bool {
+        self.elapsed + began.elapsed() > self.c.time_limit
+    }
+
+    fn next_tuple(&mut self) -> Option<Solution> {
+        let began = Instant::now();
+        loop {
+            if self.out_of_time(began) {
+                self.failure = Some(Failure {
+                    constraint: "time-limit".into(),
+                    message: format!(
+                        "time limit of {:.1} s reached ({})",
+                        self.c.time_limit.as_secs_f32(),
+                        self.explain().message
+                    ),
+                    limit: true,
+                });
+                return None;
+            }
+            if self.choices.is_empty() {
+                let name = self.object_name();
+                self.failure = Some(Failure {
+                    constraint: "grasp".into(),
+                    message: format!(
+                        "`{name}` has no grasp for the gripper (too wide for a {:.0} mm jaw opening, \
+                         or every grasp collides with the object)",
+                        crate::gripper::MAX_OPENING * 1000.0
+                    ),
+                    limit: false,
+                });
+                return None;
+            }
+            if self.points.is_none() {
+                if self.li >= self.levels.len() {
+                    return None;
+                }
+                let level = self.levels[self.li];
+                self.stats.effort_level = self.stats.effort_level.max(level);
+                let pts = self.candidate_points(level);
+                self.points = Some(pts);
+                self.pi = 0;
+                self.orientations = None;
+            }
+            let npoints = self.points.as_ref().map_or(0, Vec::len);
+            if self.pi >= npoints {
+                self.li += 1;
+                self.points = None;
+                continue;
+            }
+            if self.orientations.is_none() {
+                let p = self.points.as_ref().unwrap()[self.pi];
+                self.tried_points.insert(key(p));
+                self.stats.points += 1;
+                let o = self.orientations_at(p);
+                self.orientations = Some(o);
+                self.ci = 0;
+                self.oi = 0;
+                self.choice_ready = false;
+            }
+            if self.ci >= self.choices.len() {
+                self.pi += 1;
+                self.orientations = None;
+                continue;
+            }
+            if !self.choice_ready {
+                if self.failed_choices.contains(&self.ci) || !self.pick_feasible(self.ci) {
+                    self.ci += 1;
+                    continue;
+                }
+                self.choice_ready = true;
+                self.oi = 0;
+            }
+            let norient = self.orientations.as_ref().map_or(0, Vec::len);
+            if self.oi >= norient {
+                self.ci += 1;
+                self.choice_ready = false;
+                continue;
+            }
+            let orient = self.orientations.as_ref().unwrap()[self.oi];
+            self.oi += 1;
+            self.stats.orientations += 1;
+            let point = self.points.as_ref().unwrap()[self.pi];
+            if let Some(sol) = self.try_tuple(self.ci, point, orient) {
+                return Some(sol);
+            }
+        }
+    }
+
+    fn object_name(&self) -> String {
+        self.object
+            .map(|o| self.world.object(o).name.clone())
+            .unwrap_or_default()
+    }
+
+    fn human_name(&self) -> String {
+        self.human
+            .map(|h| self.world.agent(h).name().to_string())
+            .unwrap_or_default()
+    }
+
+    // ---- candidate points ------------------------------------------------------------------
+
+    /// Shoulder positions of the human's stances at effort levels up to `level`.
+    fn shoulders_upto(&mut self, level: u8) -> Vec<Vector> {
+        let Some(h) = self.human else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for l in 1..=level {
+            if !self.human_shoulders.contains_key(&l) {
+                let mut s = Vec::new();
+                for st in effort::stances(&self.world, h, l, None) {
+                    s.extend(effort::shoulders(&self.world, h, st.base, &st.q));
+                }
+                self.human_shoulders.insert(l, s);
+            }
+            out.extend(self.human_shoulders[&l].iter().copied());
+        }
+        out
+    }
+
+    /// Whether the human reaches `p` at effort `level` or lower (level 0: at the hand; 1 and
+    /// more: within arm's reach of a shoulder of a stance the level allows).
+    fn human_reaches(&mut self, p: Vector, level: u8) -> bool {
+        let Some(h) = self.human else { return false };
+        let info = self.world.agent(h);
+        let reach = info.reach;
+        let st = self.world.agent_state(h);
+        if info
+            .hand_links
+            .iter()
+            .any(|&l| (st.link_poses()[l].translation - p).length() <= 0.1)
+        {
+            return true;
+        }
+        if level == 0 {
+            return false;
+        }
+        self.shoulders_upto(level)
+            .iter()
+            .any(|s| (*s - p).length() <= reach)
+    }
+
+    /// Whether the eye may see `p` at effort `level`: inside the field of view (level 0) or the
+    /// head's reach (level 1 and more), with a clear line of sight through the obstacles.
+    fn may_see(&self, p: Vector, level: u8) -> bool {
+        let Some(h) = self.human else { return true };
+        let eye = self.world.eye_pose(h);
+        let info = self.world.agent(h);
+        let d = eye.rotation.inverse() * (p - eye.translation);
+        if d.x <= 0.0 {
+            // Behind the eye: only a turn of the torso or more helps.
+            if level < 2 {
+                return false;
+            }
+        } else {
+            let (mut ha, mut va) = (info.fov[0] / 2.0, info.fov[1] / 2.0);
+            if level >= 1 {
+                if let Some(pan) = info.effort.head_pan {
+                    ha += pan.upper.abs().max(pan.lower.abs());
+                }
+                if let Some(tilt) = info.effort.head_tilt {
+                    va += tilt.upper.abs().max(tilt.lower.abs());
+                }
+            }
+            if d.y.atan2(d.x).abs() > ha || d.z.atan2(d.x).abs() > va {
+                return level >= 2;
+            }
+        }
+        self.line_of_sight(eye.translation, p)
+    }
+
+    fn line_of_sight(&self, from: Vector, to: Vector) -> bool {
+        let dir = to - from;
+        let len = dir.length();
+        if len < 1e-6 {
+            return true;
+        }
+        let ray = Ray::new(from, dir / len);
+        let skip_human = self.human.map(|h| self.world.agent(h).name().to_string());
+        !self.obstacles_wo.obstacles().iter().any(|o| {
+            if let Some(n) = &skip_human
+                && o.name.starts_with(&format!("{n}/"))
+            {
+                return false;
+            }
+            o.shape.intersects_ray(&o.pose, &ray, len - 0.005)
+        })
+    }
+
+    /// Candidate points for level `level`, not tried at a lower level, best first.
+    fn candidate_points(&mut self, level: u8) -> Vec<Vector> {
+        let robot = self.setup.agent;
+        let rinfo = self.world.agent(robot);
+        let rshoulders = effort::shoulders(
+            &self.world,
+            robot,
+            self.world.agent_state(robot).base,
+            &self.q0_full,
+        );
+        let rreach = rinfo.reach;
+        let obj_h = self
+            .object
+            .map(|o| self.world.object(o).local_aabb.half_extents().max_element())
+            .unwrap_or(0.05);
+        let kind = self.task.kind;
+        let mut raw: Vec<Vector> = Vec::new();
+        if kind == TaskKind::Pick {
+            let o = self.object.unwrap();
+            raw.push(self.world.object_pose(o).translation);
+            return raw;
+        }
+        if kind.hands_over() {
+            let Some(h) = self.human else { return raw };
+            let eye = self.world.eye_pose(h).translation;
+            let mut lo = eye.min(rshoulders.iter().fold(eye, |a, b| a.min(*b)));
+            let mut hi = eye.max(rshoulders.iter().fold(eye, |a, b| a.max(*b)));
+            lo -= Vector::new(0.3, 0.3, 0.6);
+            hi += Vector::new(0.3, 0.3, 0.2);
+            lo.z = lo.z.max(0.5);
+            let step = 0.05;
+            let n = ((hi - lo) / step).ceil();
+            for i in 0..=n.x as i32 {
+                for j in 0..=n.y as i32 {
+                    for k in 0..=n.z as i32 {
+                        raw.push(lo + Vector::new(i as f32, j as f32, k as f32) * step);
+                    }
+                }
+            }
+        } else {
+            let supports: Vec<ObjectId> = match (kind, self.task.support) {
+                (TaskKind::PlaceOn, Some(s)) => vec![s],
+                _ => self
+                    .world
+                    .object_ids()
+                    .filter(|&id| {
+                        Some(id) != self.object && !self.world.object(id).surfaces.is_empty()
+                    })
+                    .collect(),
+            };
+            for s in supports {
+                let pose = self.world.object_pose(s);
+                for surf in &self.world.object(s).surfaces {
+                    let step = 0.05;
+                    let inset = 0.03;
+                    let (hx, hy) = (surf.half_extents[0] - inset, surf.half_extents[1] - inset);
+                    if hx < 0.0 || hy < 0.0 {
+                        continue;
+                    }
+                    let nx = (2.0 * hx / step).floor() as i32;
+                    let ny = (2.0 * hy / step).floor() as i32;
+                    let ox = -(nx as f32) * step / 2.0;
+                    let oy = -(ny as f32) * step / 2.0;
+                    for i in 0..=nx {
+                        for j in 0..=ny {
+                            let local = surf.centre
+                                + Vector::new(ox + i as f32 * step, oy + j as f32 * step, 0.0);
+                            raw.push(pose.transform_point(local));
+                        }
+                    }
+                }
+            }
+        }
+        let c = self.c.clone();
+        let mut pts = Vec::new();
+        for p in raw {
+            if self.tried_points.contains(&key(p)) {
+                continue;
+            }
+            let centre = if kind.hands_over() {
+                p
+            } else {
+                p + Vector::Z * obj_h
+            };
+            if !rshoulders.iter().any(|s| (*s - centre).length() <= rreach) {
+                continue;
+            }
+            if let Some(k) = c.reach_within
+                && !self.human_reaches(centre, k.min(level))
+            {
+                continue;
+            }
+            if let Some(k) = c.unreachable_within
+                && self.human_reaches(centre, k)
+            {
+                continue;
+            }
+            if c.min_visibility.is_some_and(|v| v > 0.0) && !self.may_see(centre, level) {
+                continue;
+            }
+            if c.max_visibility.is_some_and(|v| v < 0.05) && self.may_see(centre, c.max_effort) {
+                // A clear line of sight to the object's centre: it would show.
+                continue;
+            }
+            if kind.hands_over() {
+                // Free space for the object in the air.
+                let ball = parry3d::shape::Ball::new(0.03);
+                let pose = Pose::from_translation(p);
+                let aabb = ball.compute_aabb(&pose);
+                if self.obstacles_wo.first_hit(&pose, &ball, &aabb).is_some() {
+                    continue;
+                }
+            }
+            pts.push(p);
+        }
+        // Best first: near the human for tasks that serve them, near the robot otherwise.
+        let anchor = match (self.human, kind) {
+            (
+                Some(h),
+                TaskKind::Show
+                | TaskKind::Give
+                | TaskKind::MakeAccessible
+                | TaskKind::PickAndMakeAccessible,
+            ) => {
+                let st = self.world.agent_state(h);
+                let sh = effort::shoulders(&self.world, h, st.base, &st.q);
+                let n = sh.len().max(1) as f32;
+                let mid = sh.iter().fold(Vector::ZERO, |a, b| a + *b) / n;
+                if kind == TaskKind::Show {
+                    // Between the two agents.
+                    let r = rshoulders.iter().fold(Vector::ZERO, |a, b| a + *b)
+                        / rshoulders.len().max(1) as f32;
+                    (mid + r) * 0.5
+                } else {
+                    mid
+                }
+            }
+            _ => {
+                rshoulders.iter().fold(Vector::ZERO, |a, b| a + *b) / rshoulders.len().max(1) as f32
+            }
+        };
+        pts.sort_by(|a, b| {
+            (*a - anchor)
+                .length()
+                .total_cmp(&(*b - anchor).length())
+                .then(a.x.total_cmp(&b.x))
+                .then(a.y.total_cmp(&b.y))
+                .then(a.z.total_cmp(&b.z))
+        });
+        pts.truncate(c.max_points);
+        if pts.is_empty() {
+            let r = self.no_points_reason(level);
+            self.reject(Stage::Points, || r);
+        }
+        pts
+    }
+
+    fn no_points_reason(&self, level: u8) -> String {
+        let mut parts = vec![format!(
+            "reachable by {}",
+            self.world.agent(self.setup.agent).name()
+        )];
+        let h = self.human_name();
+        if let Some(k) = self.c.reach_within {
+            parts.push(format!("reachable by {h} at effort <= {}", k.min(level)));
+        }
+        if let Some(k) = self.c.unreachable_within {
+            parts.push(format!("out of {h}'s reach at effort <= {k}"));
+        }
+        if self.c.min_visibility.is_some() {
+            parts.push(format!("in {h}'s view at effort <= {level}"));
+        }
+        if self.c.max_visibility.is_some() {
+            parts.push(format!("out of {h}'s line of sight"));
+        }
+        let place = if self.task.kind.hands_over() {
+            "in the air"
+        } else {
+            "on a support surface"
+        };
+        format!("no candidate point {place} is {}", parts.join(", "))
+    }
+
+    /// Collision-free orientations of the object at `p`.
+    fn orientations_at(&mut self, p: Vector) -> Vec<Orientation> {
+        let Some(o) = self.object else {
+            return Vec::new();
+        };
+        if self.task.kind == TaskKind::Pick {
+            return vec![Orientation {
+                pose: self.world.object_pose(o),
+                face: 0,
+                yaw_index: 0,
+            }];
+        }
+        let model = self.world.object(o).clone();
+        let offset_inv = model.shape_offset.inverse();
+        let com = crate::grasp::centre_of_mass(&*model.shape);
+        let mut out = Vec::new();
+        let faces = self.faces.clone();
+        let yaws = self.cfg.placement.yaws.max(1);
+        for (fi, f) in faces.iter().enumerate() {
+            for yi in 0..yaws {
+                let yaw = std::f32::consts::TAU * yi as f32 / yaws as f32;
+                let shape_pose = if self.task.kind.hands_over() {
+                    let r = Rotation::from_rotation_z(yaw) * f.rotation;
+                    Pose::from_parts(p - r * com, r)
+                } else {
+                    f.pose_at(p, yaw, self.cfg.placement.clearance)
+                };
+                let aabb = model.shape.compute_aabb(&shape_pose);
+                if let Some(hit) = self
+                    .obstacles_wo
+                    .first_hit(&shape_pose, &*model.shape, &aabb)
+                {
+                    let name = self.obstacles_wo.obstacles()[hit].name.clone();
+                    let oname = model.name.clone();
+                    self.reject(Stage::ObjectCollision, || {
+                        format!("every orientation of `{oname}` collides (last with `{name}`)")
+                    });
+                    continue;
+                }
+                out.push(Orientation {
+                    pose: shape_pose * offset_inv,
+                    face: fi,
+                    yaw_index: yi,
+                });
+            }
+        }
+        out
+    }
+
+    // ---- grasps and motions ------------------------------------------------------------------
+
+    fn gripper_free(
+        &self,
+        tool: &Pose,
+        opening: f32,
+        obstacles: &StaticObstacles,
+    ) -> Option<String> {
+        let g = Gripper::new(opening);
+        for (local, cuboid) in &g.boxes {
+            let pose = *tool * *local;
+            let aabb = cuboid.compute_aabb(&pose);
+            if let Some(i) = obstacles.first_hit(&pose, cuboid as &Cuboid, &aabb) {
+                return Some(obstacles.obstacles()[i].name.clone());
+            }
+        }
+        None
+    }
+
+    fn motion<'s>(
+        &self,
+        setup: &'s RobotSetup,
+        arm: usize,
+        obstacles: Arc<StaticObstacles>,
+        held: Option<(ObjectId, Pose)>,
+        opening: f32,
+    ) -> Result<ArmMotion<'s>, String> {
+        let a = &setup.arms[arm];
+        let held = match held {
+            Some((o, object_in_tool)) => Some(robot::held_object(
+                &self.world,
+                setup,
+                a,
+                o,
+                object_in_tool,
+            )?),
+            None => None,
+        };
+        let mut template = self.q0_full.clone();
+        set_opening(&setup.model, a, &mut template, opening);
+        Ok(ArmMotion::new(
+            setup,
+            a,
+            obstacles,
+            held,
+            self.world.agent_state(setup.agent).base,
+            template,
+        ))
+    }
+
+    /// Whether choice `ci` can be picked up (computed once and remembered).
+    fn pick_feasible(&mut self, ci: usize) -> bool {
+        if self.held {
+            return true;
+        }
+        if let Some(p) = self.pick_cache.get(&ci) {
+            return p.is_some();
+        }
+        self.stats.grasps += 1;
+        let plan = self.plan_pick(ci);
+        let ok = plan.is_some();
+        if !ok {
+            self.failed_choices.insert(ci);
+        }
+        self.pick_cache.insert(ci, plan);
+        ok
+    }
+
+    fn plan_pick(&mut self, ci: usize) -> Option<PickPlan> {
+        let o = self.object?;
+        let ch = self.choices[ci];
+        let setup = self.setup.clone();
+        let arm = &setup.arms[ch.arm];
+        let oname = self.object_name();
+        let tool = self.world.object_pose(o) * ch.tool_in_object;
+        if self.cfg.trace {
+            eprintln!(
+                "grasp {} {}: tool at {:?} approach {:?}",
+                ch.grasp.id,
+                arm.name,
+                tool.translation,
+                tool.rotation * Vector::X
+            );
+        }
+        if let Some(n) = self.gripper_free(&tool, ch.grasp.opening, &self.obstacles_wo.clone()) {
+            self.reject(Stage::Pick, || {
+                format!("no grasp of `{oname}` is free: the gripper hits `{n}`")
+            });
+            return None;
+        }
+        let back = tool.rotation * Vector::X * (-self.c.approach);
+        let pre = Pose::from_parts(tool.translation + back, tool.rotation);
+        if let Some(n) = self.gripper_free(&pre, ch.grasp.opening, &self.obstacles_all.clone()) {
+            self.reject(Stage::Pick, || {
+                format!("no approach to `{oname}` is free: the gripper hits `{n}`")
+            });
+            return None;
+        }
+        let rrt = self.cfg.rrt.clone();
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let open_wo = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                None,
+                ch.grasp.opening,
+            )
+            .ok()?;
+        let q0 = robot::arm_values(arm, &self.q0_full);
+        let hold_empty = self
+            .motion(
+                &setup,
+                ch.arm,
+                Arc::new(StaticObstacles::empty()),
+                Some((o, ch.tool_in_object.inverse())),
+                ch.grasp.width,
+            )
+            .ok()?;
+        self.stats.ik_calls += 1;
+        let held_ok = |qa: &[f32]| hold_empty.free(qa);
+        let qg = match open_wo.ik_free(
+            tool,
+            &q0,
+            self.cfg.ik_tries,
+            self.cfg.ik_attempts,
+            &held_ok,
+            &mut rng,
+        ) {
+            Ok(q) => q,
+            Err(None) => {
+                self.reject(Stage::Pick, || {
+                    format!("no grasp of `{oname}` is within the arm's reach (inverse kinematics)")
+                });
+                return None;
+            }
+            Err(Some(c)) => {
+                self.reject(Stage::Pick, || {
+                    format!("every grasp configuration for `{oname}` collides ({c})")
+                });
+                return None;
+            }
+        };
+        // Approach: straight back from the grasp, the gripper checked against the object.
+        let shape = self.world.object(o).shape.clone();
+        let shape_pose = self.world.object_shape_pose(o);
+        let gripper = Gripper::new(ch.grasp.opening);
+        let straddle =
+            |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+        let mut checks = 0;
+        let back_path = match open_wo.straight(
+            &qg,
+            back,
+            STRAIGHT_STEPS,
+            &rrt,
+            &straddle,
+            &mut rng,
+            &mut checks,
+        ) {
+            Ok(p) => p,
+            Err(e) => {
+                self.reject(Stage::Pick, || {
+                    format!("no straight approach to `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        let qpre = back_path.waypoints.last().unwrap().clone();
+        let open_all = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_all.clone(),
+                None,
+                ch.grasp.opening,
+            )
+            .ok()?;
+        if !open_all.free(&qpre) {
+            self.reject(Stage::Pick, || {
+                format!("every pre-grasp configuration for `{oname}` collides")
+            });
+            return None;
+        }
+        self.stats.planner_calls += 1;
+        let approach = match open_all.plan(&q0, &qpre, &rrt, &mut rng) {
+            Ok((p, _)) => p,
+            Err(e) => {
+                self.reject(Stage::Pick, || {
+                    format!("no collision-free approach to `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        let mut grasp_path = back_path;
+        grasp_path.waypoints.reverse();
+        // Lift: first clear of what it rests on, then the rest with full checks.
+        let never = |_: &[f32]| true;
+        let unstick = UNSTICK.min(self.c.lift);
+        let rob_wo = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                None,
+                ch.grasp.width,
+            )
+            .ok()?;
+        let resting: Vec<&str> = self.resting_on.iter().map(String::as_str).collect();
+        let held_free_of_rest = self
+            .motion(
+                &setup,
+                ch.arm,
+                Arc::new(self.obstacles_wo.without(&resting)),
+                Some((o, ch.tool_in_object.inverse())),
+                ch.grasp.width,
+            )
+            .ok()?;
+        let hold_check = |qa: &[f32]| held_free_of_rest.free(qa);
+        let lift1 = match rob_wo.straight(
+            &qg,
+            Vector::Z * unstick,
+            1,
+            &rrt,
+            &hold_check,
+            &mut rng,
+            &mut checks,
+        ) {
+            Ok(p) => p,
+            Err(e) => {
+                self.reject(Stage::Pick, || {
+                    format!("no collision-free lift of `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        let q1 = lift1.waypoints.last().unwrap().clone();
+        let held_wo = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                Some((o, ch.tool_in_object.inverse())),
+                ch.grasp.width,
+            )
+            .ok()?;
+        let rest = self.c.lift - unstick;
+        let lift2 = if rest > 1e-4 {
+            held_wo.straight(
+                &q1,
+                Vector::Z * rest,
+                STRAIGHT_STEPS,
+                &rrt,
+                &never,
+                &mut rng,
+                &mut checks,
+            )
+        } else {
+            Ok(JointPath {
+                waypoints: vec![q1.clone()],
+            })
+        };
+        let lift2 = match lift2 {
+            Ok(p) => p,
+            Err(e) => {
+                self.reject(Stage::Pick, || {
+                    format!("no collision-free lift of `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        let q_lift = lift2.waypoints.last().unwrap().clone();
+        Some(PickPlan {
+            approach,
+            grasp: grasp_path,
+            lift: vec![(lift1, self.resting_on.clone()), (lift2, Vec::new())],
+            q_lift,
+        })
+    }
+
+    /// Visibility of the object for the human in `world` at effort `level` (the best over what
+    /// the level allows: the head as it is, turned to the object, or the stances of level 2+).
+    fn measure_visibility(&mut self, world: &World, level: u8) -> f32 {
+        let (Some(h), Some(o)) = (self.human, self.object) else {
+            return 0.0;
+        };
+        self.stats.visibility_checks += 1;
+        measure_visibility(world, h, o, level, self.cfg.visibility_resolution)
+    }
+
+    fn try_tuple(&mut self, ci: usize, point: Vector, orient: Orientation) -> Option<Solution> {
+        let o = self.object?;
+        let ch = self.choices[ci];
+        let setup = self.setup.clone();
+        let level = self.levels[self.li];
+        let oname = self.object_name();
+        let hname = self.human_name();
+        let kind = self.task.kind;
+        let object_in_tool = ch.tool_in_object.inverse();
+        let rrt = self.cfg.rrt.clone();
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let q0 = robot::arm_values(&self.setup.arms[ch.arm], &self.q0_full);
+        if kind == TaskKind::Pick {
+            let plan = self.pick_cache.get(&ci).cloned().flatten()?;
+            let mut after = self.world.clone();
+            let mut q = self.q0_full.clone();
+            let arm = &self.setup.arms[ch.arm];
+            robot::set_arm_values(arm, &mut q, &plan.q_lift);
+            set_opening(&self.setup.model, arm, &mut q, ch.grasp.width);
+            let base = after.agent_state(self.setup.agent).base;
+            after.set_agent_config(self.setup.agent, base, &q);
+            after.attach_with_grasp(o, self.setup.agent, arm.tool_link, object_in_tool);
+            let trajectories = self.pick_trajectories(ci, &plan);
+            return Some(self.solution(after, ci, None, None, level, trajectories));
+        }
+        let tool = orient.pose * ch.tool_in_object;
+        // Cheap: the gripper around the object at the placement.
+        if let Some(n) = self.gripper_free(&tool, ch.grasp.width, &self.obstacles_wo.clone()) {
+            self.reject(Stage::Gripper, || {
+                format!("the gripper holding `{oname}` hits `{n}` at every placement")
+            });
+            return None;
+        }
+        let held_wo = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                Some((o, object_in_tool)),
+                ch.grasp.width,
+            )
+            .ok()?;
+        let seed = match self.pick_cache.get(&ci).cloned().flatten() {
+            Some(p) => p.q_lift,
+            None => q0.clone(),
+        };
+        self.stats.ik_calls += 1;
+        let any = |_: &[f32]| true;
+        let qp = match held_wo.ik_free(
+            tool,
+            &seed,
+            self.cfg.ik_tries,
+            self.cfg.ik_attempts,
+            &any,
+            &mut rng,
+        ) {
+            Ok(q) => q,
+            Err(None) => {
+                self.reject(Stage::Ik, || {
+                    format!(
+                        "no placement of `{oname}` is within the arm's reach (inverse kinematics)"
+                    )
+                });
+                return None;
+            }
+            Err(Some(c)) => {
+                self.reject(Stage::Ik, || {
+                    format!("the arm collides at every placement of `{oname}` ({c})")
+                });
+                return None;
+            }
+        };
+        // The world after the task, for the visibility test.
+        let robot = self.setup.agent;
+        let base = self.world.agent_state(robot).base;
+        let arm = self.setup.arms[ch.arm].clone();
+        let mut after = self.world.clone();
+        if kind.hands_over() {
+            let mut q = self.q0_full.clone();
+            robot::set_arm_values(&arm, &mut q, &qp);
+            set_opening(&self.setup.model, &arm, &mut q, ch.grasp.width);
+            after.set_agent_config(robot, base, &q);
+            after.attach_with_grasp(o, robot, arm.tool_link, object_in_tool);
+        } else {
+            after.set_agent_config(robot, base, &self.q0_full);
+            after.set_object_pose(o, orient.pose);
+        }
+        // Exact reach of the final object position by the human.
+        let centre = after.object_aabb(o).center();
+        if let Some(k) = self.c.reach_within
+            && !self.human_reaches(centre, k.min(level.max(1)))
+        {
+            self.reject(Stage::Reach, || {
+                format!("no placement of `{oname}` is within {hname}'s reach")
+            });
+            return None;
+        }
+        if let Some(k) = self.c.unreachable_within
+            && self.human_reaches(centre, k)
+        {
+            self.reject(Stage::Reach, || {
+                format!("every placement of `{oname}` is within {hname}'s reach")
+            });
+            return None;
+        }
+        // Pixel visibility, the expensive test, last of the constraints.
+        let mut visibility = None;
+        if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
+            let vis_level = if self.c.max_visibility.is_some() {
+                self.c.max_effort
+            } else {
+                level
+            };
+            let v = self.measure_visibility(&after, vis_level);
+            visibility = Some(v);
+            if let Some(min) = self.c.min_visibility
+                && v < min
+            {
+                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.max(v)));
+                let best = self.best_visibility.unwrap();
+                self.reject(Stage::Visibility, || {
+                    format!("no placement of `{oname}` visible enough to {hname}: best visibility {best:.2} (needs >= {min:.2})")
+                });
+                return None;
+            }
+            if let Some(max) = self.c.max_visibility
+                && v > max
+            {
+                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
+                let best = self.best_visibility.unwrap();
+                self.reject(Stage::Visibility, || {
+                    format!("no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})")
+                });
+                return None;
+            }
+        }
+        // Trajectories.
+        let pick = if self.held {
+            None
+        } else {
+            self.pick_cache.get(&ci).cloned().flatten()
+        };
+        let from = pick
+            .as_ref()
+            .map(|p| p.q_lift.clone())
+            .unwrap_or_else(|| q0.clone());
+        let mut checks = 0;
+        let never = |_: &[f32]| true;
+        let mut trajectories = match &pick {
+            Some(p) => self.pick_trajectories(ci, p),
+            None => Vec::new(),
+        };
+        let held_rec = Some(HeldRecord {
+            object: oname.clone(),
+            object_in_tool: object_in_tool.into(),
+        });
+        if kind.hands_over() {
+            self.stats.planner_calls += 1;
+            let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
+                Ok((p, _)) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free trajectory to hand `{oname}` over: {e}")
+                    });
+                    return None;
+                }
+            };
+            trajectories.push(self.trajectory(
+                Phase::Transfer,
+                &arm,
+                transfer,
+                held_rec,
+                ch.grasp.width,
+                vec![],
+                None,
+            ));
+            return Some(self.solution(
+                after,
+                ci,
+                Some((point, orient, None)),
+                visibility,
+                level,
+                trajectories,
+            ));
+        }
+        // Place: straight down from above the placement.
+        let up = Vector::Z * self.c.lift;
+        let mut down =
+            match held_wo.straight(&qp, up, STRAIGHT_STEPS, &rrt, &never, &mut rng, &mut checks) {
+                Ok(p) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free descent to place `{oname}`: {e}")
+                    });
+                    return None;
+                }
+            };
+        down.waypoints.reverse();
+        let q_above = down.waypoints[0].clone();
+        self.stats.planner_calls += 1;
+        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
+            Ok((p, _)) => p,
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free trajectory carrying `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        // Retreat: open, straight back along the gripper, the gripper checked against the object.
+        let open_wo = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                None,
+                ch.grasp.opening,
+            )
+            .ok()?;
+        let shape = self.world.object(o).shape.clone();
+        let shape_pose = orient.pose * self.world.object(o).shape_offset;
+        let gripper = Gripper::new(ch.grasp.opening);
+        let straddle =
+            |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+        let back = tool.rotation * Vector::X * (-self.c.approach);
+        let retreat = match open_wo.straight(
+            &qp,
+            back,
+            STRAIGHT_STEPS,
+            &rrt,
+            &straddle,
+            &mut rng,
+            &mut checks,
+        ) {
+            Ok(p) => p,
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free retreat after placing `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        let q_ret = retreat.waypoints.last().unwrap().clone();
+        // Return the arm to where it started, the object now an obstacle where it was placed.
+        let obstacles_after = Arc::new(robot::obstacles(&after, robot, &[]));
+        let open_after = self
+            .motion(&setup, ch.arm, obstacles_after, None, ch.grasp.opening)
+            .ok()?;
+        self.stats.planner_calls += 1;
+        let home = match open_after.plan(&q_ret, &q0, &rrt, &mut rng) {
+            Ok((p, _)) => p,
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free return of the arm after placing `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        trajectories.push(self.trajectory(
+            Phase::Transfer,
+            &arm,
+            transfer,
+            held_rec.clone(),
+            ch.grasp.width,
+            vec![],
+            None,
+        ));
+        trajectories.push(self.trajectory(
+            Phase::Place,
+            &arm,
+            down,
+            held_rec,
+            ch.grasp.width,
+            vec![],
+            None,
+        ));
+        trajectories.push(self.trajectory(
+            Phase::Retreat,
+            &arm,
+            retreat,
+            None,
+            ch.grasp.opening,
+            vec![oname.clone()],
+            Some((oname.clone(), orient.pose)),
+        ));
+        trajectories.push(self.trajectory(
+            Phase::Return,
+            &arm,
+            home,
+            None,
+            ch.grasp.opening,
+            vec![],
+            None,
+        ));
+        Some(self.solution(
+            after,
+            ci,
+            Some((point, orient, self.support_under(point))),
+            visibility,
+            level,
+            trajectories,
+        ))
+    }
+
+    fn support_under(&self, p: Vector) -> Option<String> {
+        let mut best: Option<(f32, String)> = None;
+        for id in self.world.object_ids() {
+            if Some(id) == self.object {
+                continue;
+            }
+            let pose = self.world.object_pose(id);
+            for s in &self.world.object(id).surfaces {
+                let l = pose.inverse_transform_point(p) - s.centre;
+                if l.x.abs() <= s.half_extents[0] + 1e-3
+                    && l.y.abs() <= s.half_extents[1] + 1e-3
+                    && l.z.abs() < 0.02
+                {
+                    let d = l.z.abs();
+                    if best.as_ref().is_none_or(|b| d < b.0) {
+                        best = Some((d, self.world.object(id).name.clone()));
+                    }
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn trajectory(
+        &self,
+        phase: Phase,
+        arm: &robot::Arm,
+        path: JointPath,
+        held: Option<HeldRecord>,
+        opening: f32,
+        ignored: Vec<String>,
+        straddles: Option<(String, Pose)>,
+    ) -> Trajectory {
+        Trajectory {
+            phase,
+            agent: self.world.agent(self.setup.agent).name().to_string(),
+            arm: arm.name.clone(),
+            joints: arm.joint_names.clone(),
+            length: path.length(&arm.space),
+            waypoints: path.waypoints,
+            held,
+            gripper_opening: opening,
+            ignored,
+            straddles: straddles.map(|(n, p)| (n, p.into())),
+        }
+    }
+
+    fn pick_trajectories(&self, ci: usize, p: &PickPlan) -> Vec<Trajectory> {
+        let ch = self.choices[ci];
+        let arm = self.setup.arms[ch.arm].clone();
+        let oname = self.object_name();
+        let o = self.object.unwrap();
+        let held = Some(HeldRecord {
+            object: oname.clone(),
+            object_in_tool: ch.tool_in_object.inverse().into(),
+        });
+        let mut out = vec![
+            self.trajectory(
+                Phase::Approach,
+                &arm,
+                p.approach.clone(),
+                None,
+                ch.grasp.opening,
+                vec![],
+                None,
+            ),
+            self.trajectory(
+                Phase::Grasp,
+                &arm,
+                p.grasp.clone(),
+                None,
+                ch.grasp.opening,
+                vec![oname.clone()],
+                Some((oname.clone(), self.world.object_pose(o))),
+            ),
+        ];
+        for (path, ignored) in &p.lift {
+            out.push(self.trajectory(
+                Phase::Lift,
+                &arm,
+                path.clone(),
+                held.clone(),
+                ch.grasp.width,
+                ignored.clone(),
+                None,
+            ));
+        }
+        out
+    }
+
+    fn solution(
+        &mut self,
+        after: World,
+        ci: usize,
+        placed: Option<(Vector, Orientation, Option<String>)>,
+        visibility: Option<f32>,
+        level: u8,
+        trajectories: Vec<Trajectory>,
+    ) -> Solution {
+        let ch = self.choices[ci];
+        let o = self.object.unwrap();
+        let reach_effort = self.human.and_then(|_| {
+            let c = after.object_aabb(o).center();
+            (0..=geometry::effort::MAX_EFFORT.min(3)).find(|&l| self.human_reaches(c, l))
+        });
+        let placement = placed.map(|(p, orient, support)| PlacementRecord {
+            pose: orient.pose.into(),
+            support,
+            point: [p.x, p.y, p.z],
+            orientation: orient.face,
+            yaw_index: orient.yaw_index,
+        });
+        let summary = SolutionSummary {
+            task: self.task.kind,
+            args: self.task.args.clone(),
+            index: 0,
+            effort_level: level,
+            grasp: Some(GraspRecord {
+                id: if self.held { None } else { Some(ch.grasp.id) },
+                tool_in_object: ch.tool_in_object.into(),
+                width: ch.grasp.width,
+                arm: self.setup.arms[ch.arm].name.clone(),
+            }),
+            placement,
+            visibility,
+            reach_effort,
+            robot_base: None,
+            trajectories,
+            stats: self.stats,
+        };
+        Solution {
+            world: after,
+            summary,
+        }
+    }
+
+    // ---- navigate-to ---------------------------------------------------------------------
+
+    fn next_navigation(&mut self) -> Option<Solution> {
+        let began = Instant::now();
+        let robot = self.setup.agent;
+        let target = self.task.target_point?;
+        if self.points.is_none() {
+            // Base poses on rings around the target, facing it, nearest the current base first.
+            let st = self.world.agent_state(robot);
+            let cur = st.base.translation;
+            let mut cands = Vec::new();
+            for r in [0.55f32, 0.65, 0.75, 0.85] {
+                for k in 0..24 {
+                    let a = std::f32::consts::TAU * k as f32 / 24.0;
+                    cands.push(Vector::new(
+                        target.x + r * a.cos(),
+                        target.y + r * a.sin(),
+                        0.0,
+                    ));
+                }
+            }
+            cands.sort_by(|a, b| (*a - cur).length().total_cmp(&(*b - cur).length()));
+            self.points = Some(cands);
+            self.pi = 0;
+        }
+        let rreach = self.world.agent(robot).reach;
+        let q = self.q0_full.clone();
+        let obstacles = self.obstacles_all.clone();
+        let mut checker = geometry::collision::CollisionChecker::new(
+            self.setup.self_model.clone(),
+            obstacles,
+            self.world.agent_state(robot).base,
+        );
+        let start_base = self.world.agent_state(robot).base;
+        let (sx, sy) = (start_base.translation.x, start_base.translation.y);
+        let syaw = start_base
+            .rotation
+            .to_euler(parry3d::glamx::EulerRot::ZYX)
+            .0;
+        let bounds = self
+            .world
+            .scene()
+            .bounds
+            .unwrap_or_else(|| self.world.bounds());
+        let space = crate::rrt::JointSpace::new(&[
+            (bounds.mins.x.min(sx), bounds.maxs.x.max(sx), false),
+            (bounds.mins.y.min(sy), bounds.maxs.y.max(sy), false),
+            (0.0, 0.0, true),
+        ]);
+        loop {
+            if self.out_of_time(began) {
+                self.failure = Some(Failure {
+                    constraint: "time-limit".into(),
+                    message: format!(
+                        "time limit of {:.1} s reached",
+                        self.c.time_limit.as_secs_f32()
+                    ),
+                    limit: true,
+                });
+                return None;
+            }
+            let cands = self.points.as_ref().unwrap();
+            if self.pi >= cands.len() {
+                return None;
+            }
+            let c = cands[self.pi];
+            self.pi += 1;
+            self.stats.points += 1;
+            let yaw = (target.y - c.y).atan2(target.x - c.x);
+            let base = geometry::world::base_pose(c.x, c.y, yaw);
+            checker.set_base(base);
+            if !checker.is_config_free(&q) {
+                self.reject(Stage::ObjectCollision, || {
+                    "every base pose near the target collides".into()
+                });
+                continue;
+            }
+            let sh = effort::shoulders(&self.world, robot, base, &q);
+            if !sh.iter().any(|s| (*s - target).length() <= rreach) {
+                self.reject(Stage::Reach, || {
+                    "the target is out of the arm's reach from every free base pose".into()
+                });
+                continue;
+            }
+            self.stats.planner_calls += 1;
+            let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+            let valid = |b: &[f32]| {
+                let mut ck = checker.clone();
+                ck.set_base(geometry::world::base_pose(b[0], b[1], b[2]));
+                ck.is_config_free(&q)
+            };
+            let params = crate::rrt::RrtParams {
+                resolution: 0.05,
+                max_step: 0.5,
+                ..self.cfg.rrt.clone()
+            };
+            match crate::rrt::plan(
+                &space,
+                &[sx, sy, syaw],
+                &[c.x, c.y, yaw],
+                valid,
+                &params,
+                &mut rng,
+            ) {
+                Ok((path, _)) => {
+                    let mut after = self.world.clone();
+                    after.set_agent_config(robot, base, &q);
+                    let traj = Trajectory {
+                        phase: Phase::Drive,
+                        agent: self.world.agent(robot).name().to_string(),
+                        arm: "base".into(),
+                        joints: vec!["base_x".into(), "base_y".into(), "base_yaw".into()],
+                        length: path.length(&space),
+                        waypoints: path.waypoints,
+                        held: None,
+                        gripper_opening: 0.0,
+                        ignored: vec![],
+                        straddles: None,
+                    };
+                    let summary = SolutionSummary {
+                        task: self.task.kind,
+                        args: self.task.args.clone(),
+                        index: 0,
+                        effort_level: 0,
+                        grasp: None,
+                        placement: None,
+                        visibility: None,
+                        reach_effort: None,
+                        robot_base: Some([c.x, c.y, yaw]),
+                        trajectories: vec![traj],
+                        stats: self.stats,
+                    };
+                    return Some(Solution {
+                        world: after,
+                        summary,
+                    });
+                }
+                Err((e, _)) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free base path: {e}")
+                    });
+                }
+            }
+        }
+    }
+
+    /// Why the search found nothing (more): the deepest stage that rejected candidates.
+    fn explain(&self) -> Failure {
+        let (constraint, message) = match self.deepest {
+            None => (
+                "search".to_string(),
+                if self.stats.solutions > 0 {
+                    "no further solution".to_string()
+                } else {
+                    "nothing to try".to_string()
+                },
+            ),
+            Some(stage) => {
+                let name = match stage {
+                    Stage::Points => "candidate-points",
+                    Stage::Pick => "pick",
+                    Stage::ObjectCollision => "object-collision",
+                    Stage::Gripper => "gripper-collision",
+                    Stage::Ik => "inverse-kinematics",
+                    Stage::Reach => "reachability",
+                    Stage::Visibility => "visibility",
+                    Stage::Trajectory => "trajectory",
+                };
+                let mut m = self.last_reason.clone();
+                if self.stats.solutions > 0 {
+                    m = format!("no further solution after {}: {m}", self.stats.solutions);
+                }
+                (name.to_string(), m)
+            }
+        };
+        Failure {
+            constraint,
+            message,
+            limit: false,
+        }
+    }
+}
+
+/// Visibility of object `o` for human `h` in `world` at effort `level`: the head as it is
+/// (level 0), the best of that and the head turned to the object (level 1), and the best over
+/// the stances of each higher level.
+pub fn measure_visibility(
+    world: &World,
+    h: AgentId,
+    o: ObjectId,
+    level: u8,
+    resolution: usize,
+) -> f32 {
+    let mut v = visibility::visibility_for_agent(world, h, o, Aim::Current, resolution).fraction();
+    if level >= 1 {
+        v = v.max(
+            visibility::visibility_for_agent(world, h, o, Aim::AtTarget, resolution).fraction(),
+        );
+    }
+    for l in 2..=level {
+        for st in effort::stances(world, h, l, None) {
+            let mut w = world.clone();
+            w.set_agent_config(h, st.base, &st.q);
+            v = v.max(
+                visibility::visibility_for_agent(&w, h, o, Aim::AtTarget, resolution).fraction(),
+            );
+        }
+    }
+    v
+}
+
+fn key(p: Vector) -> (i32, i32, i32) {
+    (
+        (p.x * 100.0).round() as i32,
+        (p.y * 100.0).round() as i32,
+        (p.z * 100.0).round() as i32,
+    )
+}
+
+/// Whether two shapes are within 2 mm of each other.
+fn touching(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
+    parry3d::query::distance(pa, a, pb, b)
+        .map(|d| d.distance <= 0.002)
+        .unwrap_or(true)
+}
