@@ -790,48 +790,62 @@ fn key_path_at(table: &toml::de::DeTable<'_>, offset: usize) -> String {
 }
 
 fn walk_table(table: &toml::de::DeTable<'_>, offset: usize, path: &mut String) -> bool {
-    // Prefer a value containing the offset; else the key itself; else (array-of-tables headers)
-    // the last key starting before the offset.
+    // A key or value whose span contains the offset.
     for (k, v) in table.iter() {
-        let (ks, vs) = (k.span(), v.span());
-        if vs.contains(&offset) || ks.contains(&offset) {
+        if v.span().contains(&offset) || k.span().contains(&offset) {
             push_key(path, k.get_ref());
             walk_value(v.get_ref(), offset, path);
+            return true;
+        }
+    }
+    // Tables and arrays of tables written with headers (`[a]`, `[[a]]`) span only their
+    // header: look for the offset among their keys.
+    for (k, v) in table.iter() {
+        let mut sub = String::new();
+        let nested = matches!(
+            v.get_ref(),
+            toml::de::DeValue::Table(_) | toml::de::DeValue::Array(_)
+        );
+        if nested && walk_value(v.get_ref(), offset, &mut sub) {
+            push_key(path, k.get_ref());
+            path.push_str(&sub);
             return true;
         }
     }
     false
 }
 
-fn walk_value(v: &toml::de::DeValue<'_>, offset: usize, path: &mut String) {
+/// Appends the path below `v` (`.key` or `[i]` steps); true if the offset was found inside.
+fn walk_value(v: &toml::de::DeValue<'_>, offset: usize, path: &mut String) -> bool {
     match v {
         toml::de::DeValue::Table(t) => {
-            walk_table(t, offset, path);
+            let mut sub = String::new();
+            if walk_table(t, offset, &mut sub) {
+                path.push('.');
+                path.push_str(&sub);
+                return true;
+            }
+            false
         }
         toml::de::DeValue::Array(a) => {
             for (i, item) in a.iter().enumerate() {
                 if item.span().contains(&offset) {
                     path.push_str(&format!("[{i}]"));
                     walk_value(item.get_ref(), offset, path);
-                    return;
+                    return true;
                 }
             }
-            // Arrays of tables: the element whose keys contain the offset.
             for (i, item) in a.iter().enumerate() {
-                if let toml::de::DeValue::Table(t) = item.get_ref() {
-                    let mut sub = String::new();
-                    if walk_table(t, offset, &mut sub) {
-                        path.push_str(&format!("[{i}]"));
-                        if !sub.is_empty() {
-                            path.push('.');
-                            path.push_str(&sub);
-                        }
-                        return;
-                    }
+                let mut sub = String::new();
+                if walk_value(item.get_ref(), offset, &mut sub) {
+                    path.push_str(&format!("[{i}]"));
+                    path.push_str(&sub);
+                    return true;
                 }
             }
+            false
         }
-        _ => {}
+        _ => false,
     }
 }
 

@@ -1,0 +1,166 @@
+//! Scene files: the library scene loads; malformed scenes give `FILE: key.path: reason` errors
+//! and never panic; meshes, supports and world mutations behave.
+
+use std::path::{Path, PathBuf};
+
+use geometry::scene::{Scene, ShapeKind};
+use geometry::world::World;
+use parry3d::math::{Pose, Vector};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+#[test]
+fn library_scene_loads_with_the_agreed_names() {
+    let world = World::load(root().join("domains/library/scene.toml")).unwrap();
+    for name in [
+        "grey-book",
+        "white-book",
+        "pos-machine",
+        "pos-stand",
+        "platform",
+        "desk",
+        "shelf",
+        "table",
+    ] {
+        assert!(world.object_id(name).is_some(), "missing object {name}");
+    }
+    assert!(world.agent_id("pr2").is_some());
+    assert!(world.agent_id("member").is_some());
+    let book = world.object_id("grey-book").unwrap();
+    assert!(world.object(book).movable);
+    let desk = world.object_id("desk").unwrap();
+    assert!(!world.object(desk).movable);
+    assert!(!world.object(desk).surfaces.is_empty());
+}
+
+#[test]
+fn cluttered_desk_scene_loads() {
+    let world = World::load(root().join("domains/library/cluttered-desk.toml")).unwrap();
+    for name in ["big-book-1", "big-book-2", "desk", "table"] {
+        assert!(world.object_id(name).is_some(), "missing object {name}");
+    }
+    assert!(world.agent_id("pr2").is_some() && world.agent_id("member").is_some());
+}
+
+/// Every file in tests/bad_scenes/*.toml starts with `# expect: TEXT`; loading must fail with an
+/// error that names the file and contains TEXT.
+#[test]
+fn malformed_scenes_give_clear_errors() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        n += 1;
+        let text = std::fs::read_to_string(&path).unwrap();
+        let expect = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("# expect: "))
+            .unwrap_or_else(|| panic!("{}: first line must be `# expect: ...`", path.display()));
+        let result = std::panic::catch_unwind(|| World::load(&path));
+        let err = match result {
+            Ok(Ok(_)) => panic!("{} loaded but should fail", path.display()),
+            Ok(Err(e)) => e.to_string(),
+            Err(_) => panic!("{} panicked", path.display()),
+        };
+        assert!(
+            err.starts_with(&path.display().to_string()),
+            "{}: error does not name the file: {err}",
+            path.display()
+        );
+        assert!(
+            err.contains(expect.trim_end()),
+            "{}: expected `{expect}` in `{err}`",
+            path.display()
+        );
+    }
+    assert!(n >= 10, "only {n} malformed scenes");
+}
+
+#[test]
+fn syntax_errors_have_line_and_column_and_key_path() {
+    let text = "[[objects]]\nname = \"a\"\nshape = { box = [1, 2, 3] }\n\n[[objects]]\nname = \"b\"\nshape = { box = [1, 'x', 3] }\n";
+    let e = Scene::from_str(text, "t.toml", Path::new("."), "t").unwrap_err();
+    assert_eq!(e.line_col, Some((7, 21)), "{e}");
+    assert_eq!(e.key_path, "objects[1].shape.box[1]", "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("t.toml:7:21: objects[1].shape.box[1]: "),
+        "{e}"
+    );
+}
+
+#[test]
+fn garbage_never_panics() {
+    let mut rng = fastrand::Rng::with_seed(7);
+    let good = std::fs::read_to_string(root().join("domains/library/scene.toml")).unwrap();
+    let bytes = good.as_bytes();
+    for _ in 0..300 {
+        let mut b = bytes.to_vec();
+        for _ in 0..rng.usize(1..6) {
+            let i = rng.usize(..b.len());
+            b[i] = *rng.choice(b"[]{}=,.\"0123456789-xyz \n").unwrap();
+        }
+        let text = String::from_utf8_lossy(&b);
+        let base = root().join("domains/library");
+        let r = std::panic::catch_unwind(|| {
+            Scene::from_str(&text, "fuzz.toml", &base, "fuzz").and_then(World::from_scene)
+        });
+        assert!(r.is_ok(), "panicked on:\n{text}");
+    }
+}
+
+#[test]
+fn meshes_load_and_supports_are_derived() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let world = World::load(dir.join("meshes.toml")).unwrap();
+    let cube = world.object_id("cube").unwrap();
+    assert!(matches!(
+        world.object(cube).kind,
+        ShapeKind::Mesh { triangles: 12, .. }
+    ));
+    let aabb = world.object_aabb(cube);
+    assert!((aabb.maxs.z - 0.2).abs() < 1e-5 && aabb.mins.z.abs() < 1e-5);
+    let top = world.object(cube).surfaces[0];
+    assert!((top.centre.z - 0.1).abs() < 1e-5);
+    assert!((top.half_extents[0] - 0.1).abs() < 1e-5);
+    let tetra = world.object_id("tetra").unwrap();
+    assert!(matches!(
+        world.object(tetra).kind,
+        ShapeKind::Mesh { triangles: 4, .. }
+    ));
+}
+
+#[test]
+fn worlds_clone_cheaply_and_mutate_independently() {
+    let world = World::load(root().join("domains/library/scene.toml")).unwrap();
+    let book = world.object_id("grey-book").unwrap();
+    let mut w2 = world.clone();
+    w2.set_object_pose(book, Pose::from_translation(Vector::new(0.1, 0.3, 0.8)));
+    assert!(std::sync::Arc::ptr_eq(world.model(), w2.model()));
+    assert_ne!(world.object_pose(book), w2.object_pose(book));
+
+    // Attach the book to the PR2's right gripper: it follows the arm.
+    let pr2 = w2.agent_id("pr2").unwrap();
+    let hand = w2.agent(pr2).hand_links[0];
+    w2.attach(book, pr2, hand);
+    let before = w2.object_pose(book);
+    let st = w2.agent_state(pr2).clone();
+    let mut q = st.q.clone();
+    let lift = w2.agent(pr2).model.dof_index("torso_lift_joint").unwrap();
+    q[lift] += 0.1;
+    w2.set_agent_config(pr2, st.base, &q);
+    let after = w2.object_pose(book);
+    assert!((after.translation.z - before.translation.z - 0.1).abs() < 1e-4);
+    assert!(
+        w2.obstacles().all(|(id, ..)| id != book),
+        "held objects are not obstacles"
+    );
+    w2.detach(book);
+    assert!(w2.obstacles().any(|(id, ..)| id == book));
+}
