@@ -53,6 +53,12 @@ pub struct Args {
     /// With --scene: write the plan JSON (docs/plan-json.md) to this file as well.
     #[arg(long, value_name = "FILE", requires = "scene")]
     pub json_out: Option<PathBuf>,
+    /// Turn off duplicate detection (for experiments; the search may not terminate).
+    #[arg(long, hide = true)]
+    pub no_duplicate_detection: bool,
+    /// Turn off the left-recursion check (for experiments).
+    #[arg(long, hide = true)]
+    pub no_loop_check: bool,
 }
 
 /// The `--strategy` values.
@@ -81,6 +87,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             StrategyArg::Chronological => Strategy::Chronological,
             StrategyArg::GeometricFirst => Strategy::GeometricFirst { k: args.geo_k },
         },
+        duplicate_detection: !args.no_duplicate_detection,
+        loop_check: !args.no_loop_check,
         ..PlannerOptions::default()
     };
     if let Some(scene) = &args.scene {

@@ -20,7 +20,7 @@ pub(crate) enum CTerm {
 }
 
 /// A numeric expression over slots.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) enum CNum {
     Number(f64),
     Fluent(u32, Vec<CTerm>),
@@ -29,7 +29,7 @@ pub(crate) enum CNum {
 }
 
 /// A condition over slots.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) enum CFormula {
     True,
     Atom(u32, Vec<CTerm>),
@@ -45,7 +45,7 @@ pub(crate) enum CFormula {
 }
 
 /// A conjunct with the slots it reads that are free in it (bound outside it).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct CLit {
     pub f: CFormula,
     pub vars: Vec<u16>,
@@ -123,6 +123,10 @@ pub(crate) struct Compiled {
     pub goal_slot_types: Vec<u32>,
     /// Predicates no action changes.
     pub static_preds: Vec<bool>,
+    /// Ground literals of the goal's top-level conjunction (at most 64): fact key and sign.
+    pub goal_lits: Vec<(Vec<u32>, bool)>,
+    /// Per task, the goal literals (bits of `goal_lits`) it may make true.
+    pub task_goal_mask: Vec<u64>,
 }
 
 impl Compiled {
@@ -164,6 +168,8 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
             goal: CFormula::True,
             goal_slot_types: Vec::new(),
             static_preds: Vec::new(),
+            goal_lits: Vec::new(),
+            task_goal_mask: Vec::new(),
         },
         type_ids: HashMap::new(),
         domain,
@@ -222,6 +228,7 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
     b.c.methods.push(root);
     b.c.static_preds = static_predicates(&b.c);
     pull_up(&mut b.c);
+    goal_relevance(&mut b.c);
     for f in &problem.init {
         let p = b.pred(&f.predicate)?;
         let args = f
@@ -687,13 +694,19 @@ fn static_predicates(c: &Compiled) -> Vec<bool> {
     changed.iter().map(|x| !x).collect()
 }
 
-/// Precondition pull-up: a method's precondition gains (1) the whole quantifier-free part of
-/// its first subtask's precondition when that subtask is an action (the method's precondition
-/// is evaluated in the very state that action runs in), and (2) the static literals of every
-/// other primitive subtask (static facts hold or fail for the whole plan). Both are sound and
-/// lose no plan; they prune bindings early and let the binder bind through the pulled atoms.
+/// Precondition pull-up. A method's precondition gains what its subtasks certainly require:
+/// - from its first subtask, everything quantifier-free that subtask requires in the state
+///   where it starts (that is the state the method's precondition is evaluated in): an
+///   action's precondition, or the precondition of an abstract task's only method;
+/// - from every other subtask, the static literals it requires (static facts hold or fail for
+///   the whole plan).
+///
+/// What an abstract task requires is what its only method requires over the task's arguments
+/// (tasks with several methods give nothing), so requirements climb through chains of
+/// single-method tasks; this runs to a fixpoint. All of it is sound and loses no plan; it
+/// prunes bindings early and lets the binder bind through the pulled atoms.
 fn pull_up(c: &mut Compiled) {
-    let stat = static_predicates(c);
+    let stat = c.static_preds.clone();
     let is_static = |f: &CFormula| -> bool {
         match f {
             CFormula::Atom(p, _) => stat[*p as usize],
@@ -706,39 +719,78 @@ fn pull_up(c: &mut Compiled) {
             _ => false,
         }
     };
-    for mi in 0..c.methods.len() {
-        let mut extra: Vec<CFormula> = Vec::new();
-        for (i, (t, args)) in c.methods[mi].subtasks.iter().enumerate() {
-            let Some(a) = c.tasks[*t as usize].action else {
-                continue;
-            };
-            let act = &c.actions[a as usize];
-            if act.evaluable.is_some() && i > 0 {
-                continue;
+    for _round in 0..6 {
+        // What each task requires, over its argument positions: (literal, static).
+        let mut req: Vec<Vec<(CFormula, bool)>> = vec![Vec::new(); c.tasks.len()];
+        for (t, task) in c.tasks.iter().enumerate() {
+            if let Some(a) = task.action {
+                let act = &c.actions[a as usize];
+                for lit in &act.pre {
+                    if lit.vars.iter().all(|&v| (v as usize) < act.n_params)
+                        && quantifier_free(&lit.f)
+                    {
+                        req[t].push((lit.f.clone(), is_static(&lit.f)));
+                    }
+                }
+            } else if let [m] = task.methods[..] {
+                let m = &c.methods[m as usize];
+                // Slot to argument position.
+                let pos: Vec<CTerm> = (0..m.slot_types.len())
+                    .map(|s| {
+                        m.task_args
+                            .iter()
+                            .position(|t| *t == CTerm::Var(s as u16))
+                            .map_or(CTerm::Obj(u32::MAX), |k| CTerm::Var(k as u16))
+                    })
+                    .collect();
+                for lit in &m.pre {
+                    if !quantifier_free(&lit.f)
+                        || lit
+                            .vars
+                            .iter()
+                            .any(|&v| pos[v as usize] == CTerm::Obj(u32::MAX))
+                    {
+                        continue;
+                    }
+                    if let Some(f) = rename(&lit.f, &pos) {
+                        req[t].push((f, is_static(&lit.f)));
+                    }
+                }
             }
-            for lit in &act.pre {
-                // Only literals over the action's parameters (no quantified slots).
-                if lit.vars.iter().any(|&v| v as usize >= act.n_params) || !quantifier_free(&lit.f)
+        }
+        let mut changed = false;
+        for mi in 0..c.methods.len() {
+            let mut extra: Vec<CFormula> = Vec::new();
+            for (i, (t, args)) in c.methods[mi].subtasks.iter().enumerate() {
+                if let Some(a) = c.tasks[*t as usize].action
+                    && c.actions[a as usize].evaluable.is_some()
+                    && i > 0
                 {
                     continue;
                 }
-                if (i == 0 || is_static(&lit.f))
-                    && let Some(f) = rename(&lit.f, args)
-                {
-                    extra.push(f);
+                for (f, st) in &req[*t as usize] {
+                    if (i == 0 || *st)
+                        && let Some(f) = rename(f, args)
+                    {
+                        extra.push(f);
+                    }
                 }
             }
+            let m = &mut c.methods[mi];
+            for f in extra {
+                if m.pre.iter().any(|l| l.f == f) {
+                    continue;
+                }
+                let mut vars = Vec::new();
+                free_vars(&f, &mut vars);
+                vars.sort_unstable();
+                vars.dedup();
+                m.pre.push(CLit { f, vars });
+                changed = true;
+            }
         }
-        if extra.is_empty() {
-            continue;
-        }
-        let m = &mut c.methods[mi];
-        for f in extra {
-            let mut vars = Vec::new();
-            free_vars(&f, &mut vars);
-            vars.sort_unstable();
-            vars.dedup();
-            m.pre.push(CLit { f, vars });
+        if !changed {
+            break;
         }
     }
 }
@@ -795,4 +847,86 @@ fn rename(f: &CFormula, args: &[CTerm]) -> Option<CFormula> {
         CFormula::Compare(op, a, b) => CFormula::Compare(*op, num(a, args)?, num(b, args)?),
         CFormula::Exists(..) | CFormula::Forall(..) => return None,
     })
+}
+
+/// The goal's ground top-level literals and, per task, which of them the task may achieve
+/// (an over-approximation through all its methods): a node whose remaining task network can
+/// achieve no false goal literal is a dead end.
+fn goal_relevance(c: &mut Compiled) {
+    let mut lits = Vec::new();
+    let top: Vec<&CFormula> = match &c.goal {
+        CFormula::And(xs) => xs.iter().collect(),
+        f => vec![f],
+    };
+    for f in top {
+        let (atom, positive) = match f {
+            CFormula::Not(x) => (&**x, false),
+            f => (f, true),
+        };
+        if let CFormula::Atom(p, args) = atom
+            && lits.len() < 64
+        {
+            let mut key = vec![*p];
+            let mut ground = true;
+            for a in args {
+                match a {
+                    CTerm::Obj(o) => key.push(*o),
+                    CTerm::Var(_) => ground = false,
+                }
+            }
+            if ground {
+                lits.push((key, positive));
+            }
+        }
+    }
+    fn effect_mask(effs: &[CEffect], lits: &[(Vec<u32>, bool)], m: &mut u64) {
+        for e in effs {
+            match e {
+                CEffect::Add(p, _) | CEffect::Del(p, _) => {
+                    let add = matches!(e, CEffect::Add(..));
+                    for (i, (k, pos)) in lits.iter().enumerate() {
+                        if k[0] == *p && *pos == add {
+                            *m |= 1 << i;
+                        }
+                    }
+                }
+                CEffect::Forall(_, inner) | CEffect::When(_, inner) => effect_mask(inner, lits, m),
+                CEffect::Num(..) => {}
+            }
+        }
+    }
+    let mut mask = vec![0u64; c.tasks.len()];
+    for (t, task) in c.tasks.iter().enumerate() {
+        if let Some(a) = task.action {
+            let act = &c.actions[a as usize];
+            effect_mask(&act.effects, &lits, &mut mask[t]);
+            if act.evaluable.is_some() {
+                for (i, (k, _)) in lits.iter().enumerate() {
+                    if c.shared_preds[k[0] as usize] {
+                        mask[t] |= 1 << i;
+                    }
+                }
+            }
+        }
+    }
+    loop {
+        let mut changed = false;
+        for t in 0..c.tasks.len() {
+            let mut m = mask[t];
+            for &mi in &c.tasks[t].methods {
+                for (st, _) in &c.methods[mi as usize].subtasks {
+                    m |= mask[*st as usize];
+                }
+            }
+            if m != mask[t] {
+                mask[t] = m;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    c.goal_lits = lits;
+    c.task_goal_mask = mask;
 }

@@ -82,6 +82,10 @@ pub struct PlannerOptions {
     pub strategy: Strategy,
     /// The initial bound on the task network's length (doubled on each restart).
     pub initial_depth_bound: usize,
+    /// Prune nodes (state, task network) expanded before. Off only for experiments.
+    pub duplicate_detection: bool,
+    /// Prune tasks decomposed again by an ancestor with no progress (see the module docs).
+    pub loop_check: bool,
 }
 
 impl Default for PlannerOptions {
@@ -91,6 +95,8 @@ impl Default for PlannerOptions {
             seed: 0,
             strategy: Strategy::default(),
             initial_depth_bound: 1024,
+            duplicate_detection: true,
+            loop_check: true,
         }
     }
 }
@@ -121,6 +127,8 @@ pub struct SearchStats {
     pub revisits_pruned: u64,
     /// Tasks pruned because an ancestor decomposes the same task with no action in between.
     pub loops_pruned: u64,
+    /// Nodes pruned because the remaining tasks cannot achieve a false goal literal.
+    pub goal_pruned: u64,
     /// Nodes cut off by the task-network length bound.
     pub depth_cutoffs: u64,
     /// Searches run (1 + restarts with a doubled bound).

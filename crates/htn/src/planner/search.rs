@@ -31,6 +31,8 @@ struct Cell {
     hash: u64,
     /// The decomposition (index in the tree) that created this cell, or `NIL`.
     parent: u32,
+    /// The goal literals the network from this cell down may achieve.
+    may: u64,
 }
 
 struct Step {
@@ -201,7 +203,7 @@ impl<'a, 'o> Search<'a, 'o> {
             visited: HashSet::default(),
             bound: opts.initial_depth_bound.max(1),
             cutoff: false,
-            loop_check: true,
+            loop_check: opts.loop_check,
             stats: SearchStats::default(),
             start: Instant::now(),
             effects: EffectBuf::default(),
@@ -327,7 +329,13 @@ impl<'a, 'o> Search<'a, 'o> {
                 self.cutoff = true;
                 self.stats.depth_cutoffs += 1;
                 false
-            } else if self.mode == Mode::Normal && !self.first_visit(cell.hash) {
+            } else if !self.goal_reachable(cell.may) {
+                self.stats.goal_pruned += 1;
+                false
+            } else if self.mode == Mode::Normal
+                && self.opts.duplicate_detection
+                && !self.first_visit(cell.hash)
+            {
                 self.stats.revisits_pruned += 1;
                 false
             } else {
@@ -367,6 +375,16 @@ impl<'a, 'o> Search<'a, 'o> {
             r = rec.parent;
         }
         false
+    }
+
+    /// Whether every goal literal that is false now may still be achieved by the network
+    /// whose tasks may achieve `may`.
+    fn goal_reachable(&self, may: u64) -> bool {
+        self.c
+            .goal_lits
+            .iter()
+            .enumerate()
+            .all(|(i, (key, pos))| may & (1 << i) != 0 || self.state.holds(key) == *pos)
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
@@ -442,12 +460,13 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     fn push_cell(&mut self, task: u32, occ: u32, next: u32, parent: u32) -> u32 {
-        let (len, h) = if next == NIL {
-            (0, 0)
+        let (len, h, may) = if next == NIL {
+            (0, 0, 0)
         } else {
             let n = &self.arena[next as usize];
-            (n.len, n.hash)
+            (n.len, n.hash, n.may)
         };
+        let may = may | self.c.task_goal_mask[self.gtasks.key(task)[0] as usize];
         let hash = mix64(h.rotate_left(7) ^ mix64(task as u64 ^ self.salt));
         self.arena.push(Cell {
             task,
@@ -456,6 +475,7 @@ impl<'a, 'o> Search<'a, 'o> {
             len: len + 1,
             hash,
             parent,
+            may,
         });
         (self.arena.len() - 1) as u32
     }
