@@ -173,7 +173,8 @@ fn centre_of(world: &World, o: ObjectId) -> Vector {
     world.object_aabb(o).center()
 }
 
-/// `on(a, b)`: see the module docs.
+/// `on(a, b)`: see the module docs. When `a` rests on something else lying on `b` (a book on a
+/// book on the table), `a` is on that thing, not on `b`.
 pub fn on(world: &World, a: ObjectId, b: ObjectId, tolerance: f32) -> bool {
     if a == b {
         return false;
@@ -181,20 +182,46 @@ pub fn on(world: &World, a: ObjectId, b: ObjectId, tolerance: f32) -> bool {
     let aabb_a = world.object_aabb(a);
     let c = aabb_a.center();
     let bottom = aabb_a.mins.z;
+    let Some(height) = support_height_under(world, b, c, bottom, tolerance) else {
+        return false;
+    };
+    // Something between a's bottom and b's surface, under a's centre, carries a instead.
+    !world.object_ids().any(|o| {
+        if o == a || o == b {
+            return false;
+        }
+        let bb = world.object_aabb(o);
+        inside_xy(c, &bb) && bb.maxs.z > height + 0.005 && bb.maxs.z <= bottom + 0.01
+    })
+}
+
+/// Height of the support surface of `b` under the point `c` on which an object with its
+/// bottom at `bottom` could rest (within `tolerance`).
+fn support_height_under(
+    world: &World,
+    b: ObjectId,
+    c: Vector,
+    bottom: f32,
+    tolerance: f32,
+) -> Option<f32> {
     let ob = world.object(b);
-    let pose_b = world.object_pose(b);
     if ob.surfaces.is_empty() {
         let bb = world.object_aabb(b);
-        return inside_xy(c, &bb) && bottom >= bb.maxs.z - 0.01 && bottom <= bb.maxs.z + tolerance;
+        let ok = inside_xy(c, &bb) && bottom >= bb.maxs.z - 0.01 && bottom <= bb.maxs.z + tolerance;
+        return ok.then_some(bb.maxs.z);
     }
+    let pose_b = world.object_pose(b);
     let local = pose_b.inverse_transform_point(c);
     let local_bottom = bottom - pose_b.translation.z;
-    ob.surfaces.iter().any(|s| {
-        (local.x - s.centre.x).abs() <= s.half_extents[0]
-            && (local.y - s.centre.y).abs() <= s.half_extents[1]
-            && local_bottom >= s.centre.z - 0.01
-            && local_bottom <= s.centre.z + tolerance
-    })
+    ob.surfaces
+        .iter()
+        .find(|s| {
+            (local.x - s.centre.x).abs() <= s.half_extents[0]
+                && (local.y - s.centre.y).abs() <= s.half_extents[1]
+                && local_bottom >= s.centre.z - 0.01
+                && local_bottom <= s.centre.z + tolerance
+        })
+        .map(|s| s.centre.z + pose_b.translation.z)
 }
 
 fn inside_xy(p: Vector, b: &Aabb) -> bool {
