@@ -6,7 +6,8 @@
 //!   stance the level allows ([`crate::effort::stances`]), the head turned towards the object.
 //! * `reachable(o, a)` with the least effort level: 0 when a hand of `a` holds or touches `o`;
 //!   from level 1, when some shoulder of a stance of that level is within the agent's arm reach of
-//!   the object's surface (exact point-to-shape distance).
+//!   the object's surface (exact point-to-shape distance), confirmed by inverse kinematics of an
+//!   arm (the hand frame on the object's nearest surface point, joint limits respected).
 //! * `on(a, b)`: the centre of `a` lies over one of `b`'s support surfaces (or, for objects with
 //!   none, over `b`'s footprint) and `a`'s bottom is within `on_tolerance` above that surface.
 //! * `inside(a, b)`: the centre of `a` lies inside `b`'s oriented bounding box, and `a` is not
@@ -19,10 +20,12 @@
 //! `covered-by` can be any object.
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::Vector;
+use parry3d::math::{Pose, Vector};
+use parry3d::query::PointQuery;
 use serde::Serialize;
 
 use crate::effort::{MAX_EFFORT, aim_head, shoulders, stances};
+use crate::ik::{IkOptions, solve_ik};
 use crate::scene::{AgentId, ObjectId};
 use crate::visibility::{Aim, visibility_for_agent, visibility_from};
 use crate::world::World;
@@ -40,6 +43,9 @@ pub struct FactParams {
     pub max_move_stances: usize,
     /// Distance from a hand frame within which an object counts as in the hand (level 0).
     pub hand_tolerance: f32,
+    /// Confirm reach with inverse kinematics of an arm (position of the hand frame at the
+    /// object's point nearest the arm's root; seeded, a few restarts), not only the reach radius.
+    pub confirm_with_ik: bool,
 }
 
 impl Default for FactParams {
@@ -50,6 +56,7 @@ impl Default for FactParams {
             on_tolerance: 0.05,
             max_move_stances: 40,
             hand_tolerance: 0.03,
+            confirm_with_ik: true,
         }
     }
 }
@@ -144,15 +151,51 @@ pub fn reachable_effort(
         for s in &list {
             let lean_variants = lean_variants(world, agent, s);
             for q in lean_variants {
-                for p in shoulders(world, agent, s.base, &q) {
-                    if distance_to_object(world, object, p) <= info.reach {
-                        return Some(level);
-                    }
+                let near = shoulders(world, agent, s.base, &q)
+                    .into_iter()
+                    .any(|p| distance_to_object(world, object, p) <= info.reach);
+                if near
+                    && (!params.confirm_with_ik || ik_confirms(world, agent, s.base, &q, object))
+                {
+                    return Some(level);
                 }
             }
         }
     }
     None
+}
+
+/// Whether an arm of the agent (the `right_arm` / `left_arm` chains of its model) can put its
+/// hand frame on the object's surface point nearest the arm's root, from this stance.
+fn ik_confirms(world: &World, agent: AgentId, base: Pose, q: &[f32], object: ObjectId) -> bool {
+    let model = &world.agent(agent).model;
+    let obj = world.object(object);
+    let pose = world.object_shape_pose(object);
+    let options = IkOptions {
+        attempts: 6,
+        iterations: 80,
+        position_tolerance: 0.01,
+        orientation_tolerance: 1.0,
+        orientation: false,
+    };
+    let mut rng = fastrand::Rng::with_seed(0x5eed);
+    ["right_arm", "left_arm"].iter().any(|name| {
+        let Ok(chain) = model.chain(name) else {
+            return false;
+        };
+        let root = model.link_pose_by_id(base, q, chain.root_link).translation;
+        let point = obj.shape.project_point(&pose, root, true).point;
+        solve_ik(
+            model,
+            &chain,
+            base,
+            q,
+            Pose::from_translation(point),
+            &options,
+            &mut rng,
+        )
+        .is_ok()
+    })
 }
 
 /// Level-4 stances stand upright; reaching from them may also lean forward.
