@@ -21,7 +21,6 @@
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
-use parry3d::query::PointQuery;
 use serde::Serialize;
 
 use crate::effort::{MAX_EFFORT, aim_head, shoulders, stances};
