@@ -32,6 +32,8 @@ struct Desk {
     streams: HashMap<u64, (String, Vec<Placement>, usize)>,
     next_id: u64,
     solutions_given: usize,
+    /// A crowded desk: any book on it blocks every further placement.
+    crowded: bool,
 }
 
 impl GeometricOracle for Desk {
@@ -49,7 +51,11 @@ impl GeometricOracle for Desk {
         let (book, opened_in, pos) = self.streams.get_mut(&s.0).expect("an open stream");
         // Stack discipline: a stream is asked only in the world it was opened in.
         assert_eq!(*opened_in, self.world, "stream asked in another world");
-        let blocked = self.world.iter().any(|(_, slot)| slot == "p1");
+        let blocked = if self.crowded {
+            !self.world.is_empty()
+        } else {
+            self.world.iter().any(|(_, slot)| slot == "p1")
+        };
         while *pos < SLOTS.len() {
             let slot = SLOTS[*pos];
             *pos += 1;
@@ -98,8 +104,15 @@ fn load(problem: &str) -> (Domain, Problem) {
 /// Plans with a fresh desk; returns the plan's steps as text (`makebkacc b1@p2`, `givebk b2`)
 /// and the statistics. Checks the plan with the validator and the desk's final world.
 fn run(problem: &str, strategy: Strategy) -> (Vec<String>, SearchStats) {
+    run_on(problem, strategy, false)
+}
+
+fn run_on(problem: &str, strategy: Strategy, crowded: bool) -> (Vec<String>, SearchStats) {
     let (d, p) = load(problem);
-    let mut desk = Desk::default();
+    let mut desk = Desk {
+        crowded,
+        ..Desk::default()
+    };
     let opts = PlannerOptions {
         strategy,
         ..PlannerOptions::default()
@@ -190,6 +203,18 @@ fn heavy_book_geometric_first_replaces_the_first_book() {
     let (s, st) = run("desk-heavy.hddl", Strategy::GeometricFirst { k: 2 });
     assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
     assert_eq!(st.geo_repairs_succeeded, 1);
+}
+
+#[test]
+fn geometric_first_falls_back_to_htn_choices_when_no_repair_works() {
+    // On a crowded desk no placement of the first book leaves room for the second: the repair
+    // tries b1 at the back, replays, fails again, restores b1 at the front and only then hands
+    // the second book over (the HTN alternative at the failure point).
+    let (s, st) = run_on("desk-light.hddl", Strategy::GeometricFirst { k: 3 }, true);
+    assert_eq!(s, ["makebkacc b1@p1", "givebk b2"]);
+    assert_eq!((st.geo_repairs, st.geo_repairs_succeeded), (1, 0));
+    assert_eq!(st.geo_backtracks, 1);
+    assert_eq!(st.htn_backtracks, 1);
 }
 
 #[test]
