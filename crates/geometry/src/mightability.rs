@@ -457,6 +457,29 @@ impl Mightability {
         (l != NONE).then_some(l)
     }
 
+    /// Least level at which `agent` sees (`vis = true`) or reaches some cell the object
+    /// occupies (its bounding box, in the world state the maps were computed from).
+    pub fn object_level(
+        &self,
+        world: &World,
+        agent: AgentId,
+        object: ObjectId,
+        vis: bool,
+    ) -> Option<u8> {
+        let m = self.maps(agent);
+        let v = if vis { &m.vis } else { &m.reach };
+        let (lo, hi) = self.grid.cell_range(&world.object_aabb(object))?;
+        let mut best = NONE;
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    best = best.min(v[self.grid.index([i, j, k])]);
+                }
+            }
+        }
+        (best != NONE).then_some(best)
+    }
+
     /// Number of cells `agent` sees (`vis = true`) or reaches at level `level` or below.
     pub fn count(&self, agent: AgentId, level: u8, vis: bool) -> usize {
         let m = self.maps(agent);

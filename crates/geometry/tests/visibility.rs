@@ -104,3 +104,41 @@ fn agents_see_what_is_in_front_of_them() {
     let v = visibility_for_agent(&w, member, book, Aim::AtTarget, 64);
     assert!(v.fraction() < 0.5, "{v:?}");
 }
+
+/// The paper's definition, literally: render the target alone and with the scene from the same
+/// camera and count its pixels. The ray grid over the target agrees with it.
+#[test]
+fn agrees_with_counting_pixels_of_full_renders() {
+    use geometry::render::{Camera, Projection, render};
+    use geometry::world::BodyOwner;
+    let occluded = world(&format!(
+        "{TARGET}[[objects]]\nname = \"panel\"\nshape = {{ box = [0.05, 0.25, 0.5] }}\npose = {{ xyz = [1.0, -0.1, 1.05] }}\n"
+    ));
+    let alone = world(TARGET);
+    let eye = eye_looking(Vector::new(0.0, 0.3, 1.2), Vector::new(2.0, 0.0, 1.0));
+    let cam = Camera {
+        pose: eye,
+        projection: Projection::Perspective {
+            fov_x: 0.4,
+            fov_y: 0.4,
+        },
+    };
+    let t = BodyOwner::Object(occluded.object_id("target").unwrap());
+    let shown = render(&occluded, &cam, 200, 200).count(t) as f32;
+    let ideal = render(&alone, &cam, 200, 200).count(t) as f32;
+    let by_render = shown / ideal;
+    let by_rays = visibility_from(
+        &occluded,
+        occluded.object_id("target").unwrap(),
+        &eye,
+        FOV,
+        64,
+    )
+    .fraction();
+    assert!(ideal > 1000.0);
+    assert!(by_render > 0.05 && by_render < 0.95, "{by_render}");
+    assert!(
+        (by_render - by_rays).abs() < 0.05,
+        "render {by_render} rays {by_rays}"
+    );
+}
