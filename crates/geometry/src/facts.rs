@@ -45,6 +45,9 @@ pub struct FactParams {
     /// Confirm reach with inverse kinematics of an arm (position of the hand frame at the
     /// object's point nearest the arm's root; seeded, a few restarts), not only the reach radius.
     pub confirm_with_ik: bool,
+    /// Highest effort level examined: a literal needing more comes out as not holding (`None`).
+    /// A planner that only uses levels <= 1 saves most of the work with `max_effort: 1`.
+    pub max_effort: u8,
 }
 
 impl Default for FactParams {
@@ -56,6 +59,7 @@ impl Default for FactParams {
             max_move_stances: 40,
             hand_tolerance: 0.03,
             confirm_with_ik: true,
+            max_effort: MAX_EFFORT,
         }
     }
 }
@@ -81,12 +85,14 @@ pub fn visible_effort(
     if visibility_for_agent(world, agent, object, Aim::Current, res).fraction() >= thr {
         return Some(0);
     }
-    if visibility_for_agent(world, agent, object, Aim::AtTarget, res).fraction() >= thr {
+    if params.max_effort >= 1
+        && visibility_for_agent(world, agent, object, Aim::AtTarget, res).fraction() >= thr
+    {
         return Some(1);
     }
     let target = world.object_aabb(object).center();
     let fov = world.agent(agent).fov;
-    for level in 2..=MAX_EFFORT {
+    for level in 2..=params.max_effort.min(MAX_EFFORT) {
         let mut list = stances(world, agent, level, Some(target));
         if level == MAX_EFFORT {
             sort_by_distance(&mut list, target);
@@ -141,7 +147,7 @@ pub fn reachable_effort(
         return Some(0);
     }
     let target = world.object_aabb(object).center();
-    for level in 1..=MAX_EFFORT {
+    for level in 1..=params.max_effort.min(MAX_EFFORT) {
         let mut list = stances(world, agent, level, Some(target));
         if level == MAX_EFFORT {
             sort_by_distance(&mut list, target);

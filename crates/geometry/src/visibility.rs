@@ -50,12 +50,15 @@ impl Visibility {
 }
 
 /// How the agent's head is set for a query.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Aim {
     /// The head as it is now (effort level 0).
     Current,
     /// The head turned towards the target within its joint limits (effort level 1 and above).
     AtTarget,
+    /// The head at these pan and tilt angles (radians; positive tilt looks down), clamped to the
+    /// joint limits.
+    Head { pan: f32, tilt: f32 },
 }
 
 /// Visibility of `target` from an eye frame `eye` (x forward) with field of view `fov`
@@ -135,8 +138,8 @@ pub fn visibility_from(
     vis
 }
 
-/// Visibility of `target` for an agent as it stands now, with the head as it is ([`Aim::Current`])
-/// or turned towards the target ([`Aim::AtTarget`]).
+/// Visibility of `target` for an agent as it stands now, with the head as it is ([`Aim::Current`]),
+/// turned towards the target ([`Aim::AtTarget`]) or at given angles ([`Aim::Head`]).
 pub fn visibility_for_agent(
     world: &World,
     agent: AgentId,
@@ -151,6 +154,17 @@ pub fn visibility_for_agent(
             let mut q = st.q.clone();
             let centre = world.object_aabb(target).center();
             aim_head(world, agent, st.base, &mut q, centre)
+        }
+        Aim::Head { pan, tilt } => {
+            let info = world.agent(agent);
+            let mut q = st.q.clone();
+            if let Some(r) = info.effort.head_pan {
+                q[r.dof] = pan.clamp(r.lower, r.upper);
+            }
+            if let Some(r) = info.effort.head_tilt {
+                q[r.dof] = tilt.clamp(r.lower, r.upper);
+            }
+            info.model.link_pose_by_id(st.base, &q, info.eye_link)
         }
     };
     visibility_from(world, target, &eye, world.agent(agent).fov, resolution)

@@ -98,3 +98,27 @@ fn the_pos_machine_can_be_put_away_on_the_table() {
     let r = geometry::facts::reachable_effort(&world, pr2, pos, &params);
     assert!(r.is_some_and(|r| r <= 1), "pr2 Reach {r:?}");
 }
+
+#[test]
+fn max_effort_caps_the_search() {
+    let world = library();
+    let params = FactParams {
+        max_effort: 1,
+        ..FactParams::default()
+    };
+    let member = world.agent_id("member").unwrap();
+    let pr2 = world.agent_id("pr2").unwrap();
+    let book = world.object_id("grey-book").unwrap();
+    assert_eq!(
+        geometry::facts::visible_effort(&world, member, book, &params),
+        None
+    );
+    assert_eq!(
+        geometry::facts::reachable_effort(&world, member, book, &params),
+        None
+    );
+    assert_eq!(
+        geometry::facts::reachable_effort(&world, pr2, book, &params),
+        Some(1)
+    );
+}

@@ -142,3 +142,34 @@ fn agrees_with_counting_pixels_of_full_renders() {
         "render {by_render} rays {by_rays}"
     );
 }
+
+#[test]
+fn head_angles_decide_what_is_in_view() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let w = World::load(root.join("domains/library/scene.toml")).unwrap();
+    let member = w.agent_id("member").unwrap();
+    let platform = w.object_id("platform").unwrap();
+    let ahead = visibility_for_agent(
+        &w,
+        member,
+        platform,
+        Aim::Head {
+            pan: 0.0,
+            tilt: 0.4,
+        },
+        32,
+    );
+    assert!(ahead.fraction() > 0.9, "{ahead:?}");
+    // Head turned fully to one side and up: the platform in front leaves the view.
+    let away = visibility_for_agent(
+        &w,
+        member,
+        platform,
+        Aim::Head {
+            pan: 1.4,
+            tilt: -0.8,
+        },
+        32,
+    );
+    assert!(away.fraction() < 0.1, "{away:?}");
+}
