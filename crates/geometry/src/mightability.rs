@@ -21,7 +21,7 @@
 //! solutions are confirmed with the exact checks ([`crate::facts`], [`crate::visibility`]).
 //! [`cached`] computes them once per world state and keeps them in memory.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::{Arc, Mutex, Weak};
 
 use parry3d::bounding_volume::Aabb;
@@ -52,6 +52,8 @@ pub struct MightabilityParams {
     pub move_stride: usize,
     /// Margin added around the world's bounds when the scene gives none.
     pub margin: f32,
+    /// Eyes of one level closer than this (metres) share one fan of rays.
+    pub eye_merge: f32,
 }
 
 impl Default for MightabilityParams {
@@ -63,6 +65,7 @@ impl Default for MightabilityParams {
             move_ray_step_deg: 2.0,
             move_stride: 3,
             margin: 0.5,
+            eye_merge: 0.1,
         }
     }
 }
@@ -356,6 +359,31 @@ fn dedup_points(points: Vec<Vector>, q: f32) -> Vec<Vector> {
         .collect()
 }
 
+/// The smallest direction set holding both (a frustum widens to its eye's whole sphere).
+fn union(a: Directions, b: Directions) -> Directions {
+    use std::f32::consts::{PI, TAU};
+    match (a, b) {
+        (Directions::Range { yaw: ya, el: ea }, Directions::Range { yaw: yb, el: eb }) => {
+            // Shift b's yaw interval by whole turns to lie nearest a's.
+            let ca = 0.5 * (ya[0] + ya[1]);
+            let cb = 0.5 * (yb[0] + yb[1]);
+            let shift = ((ca - cb) / TAU).round() * TAU;
+            let mut yaw = [ya[0].min(yb[0] + shift), ya[1].max(yb[1] + shift)];
+            if yaw[1] - yaw[0] >= TAU {
+                yaw = [-PI, PI];
+            }
+            Directions::Range {
+                yaw,
+                el: [ea[0].min(eb[0]), ea[1].max(eb[1])],
+            }
+        }
+        _ => Directions::Range {
+            yaw: [-PI, PI],
+            el: [-0.5 * PI, 0.5 * PI],
+        },
+    }
+}
+
 /// Yaw and elevation of a frame's x axis.
 fn yaw_pitch(rot: Rotation) -> (f32, f32) {
     let x = rot * Vector::X;
@@ -582,7 +610,9 @@ fn agent_maps(
         } else {
             list
         };
-        let mut keys = HashSet::new();
+        // Eyes within `merge` of each other share one ray fan over the union of their ranges.
+        let merge = params.eye_merge;
+        let mut keys: HashMap<(i64, i64, i64), usize> = HashMap::new();
         for s in &list {
             let eye = eye_at(s.base, &s.q);
             let full = level == MAX_EFFORT;
@@ -594,26 +624,25 @@ fn agent_maps(
                 full,
             );
             let key = (
-                (eye.translation.x / 0.02).round() as i64,
-                (eye.translation.y / 0.02).round() as i64,
-                (eye.translation.z / 0.02).round() as i64,
-                match dirs {
-                    Directions::Range { yaw, el } => {
-                        [yaw[0], yaw[1], el[0], el[1]].map(|v| (v / 0.05).round() as i64)
-                    }
-                    Directions::Frustum { .. } => [0; 4],
-                },
+                (eye.translation.x / merge).round() as i64,
+                (eye.translation.y / merge).round() as i64,
+                (eye.translation.z / merge).round() as i64,
             );
-            if keys.insert(key) {
-                eyes[level as usize].push(Eye {
-                    pos: eye.translation,
-                    dirs,
-                    step: match level {
-                        1 => step,
-                        MAX_EFFORT => mstep,
-                        _ => bstep,
-                    },
-                });
+            let bucket = &mut eyes[level as usize];
+            match keys.get(&key) {
+                Some(&k) => bucket[k].dirs = union(bucket[k].dirs, dirs),
+                None => {
+                    keys.insert(key, bucket.len());
+                    bucket.push(Eye {
+                        pos: eye.translation,
+                        dirs,
+                        step: match level {
+                            1 => step,
+                            MAX_EFFORT => mstep,
+                            _ => bstep,
+                        },
+                    });
+                }
             }
             // Reach: shoulders of the stance; at level 4 also turned (8 ways) and leaning.
             let mut qs = vec![s.q.clone()];
@@ -641,26 +670,35 @@ fn agent_maps(
     }
 
     // ---- visibility ----
+    // All eyes of all levels in one parallel pass, one set of seen cells per level.
+    let levels = MAX_EFFORT as usize + 1;
+    let tagged: Vec<(usize, &Eye)> = eyes
+        .iter()
+        .enumerate()
+        .flat_map(|(l, list)| list.iter().map(move |e| (l, e)))
+        .collect();
+    let seen = tagged
+        .par_iter()
+        .fold(
+            || vec![BitGrid::new(grid.len()); levels],
+            |mut bits, (l, eye)| {
+                cast_eye(grid, occ, eye, &mut bits[*l]);
+                bits
+            },
+        )
+        .reduce(
+            || vec![BitGrid::new(grid.len()); levels],
+            |a, b| a.into_iter().zip(&b).map(|(x, y)| x.or(y)).collect(),
+        );
+    // A cell keeps the least level that sees it: levels are cumulative.
     let mut vis = vec![NONE; grid.len()];
-    for (level, list) in eyes.iter().enumerate() {
-        let seen = list
-            .par_iter()
-            .fold(
-                || BitGrid::new(grid.len()),
-                |mut bits, eye| {
-                    cast_eye(grid, occ, eye, &mut bits);
-                    bits
-                },
-            )
-            .reduce(|| BitGrid::new(grid.len()), |a, b| a.or(&b));
+    for (level, bits) in seen.iter().enumerate() {
         for (i, v) in vis.iter_mut().enumerate() {
-            if *v == NONE && seen.get(i) {
+            if *v == NONE && bits.get(i) {
                 *v = level as u8;
             }
         }
     }
-    // Levels are cumulative: what a level sees, every higher level sees.
-    // (Already so: a cell keeps the first, least level that marked it.)
 
     // ---- reach ----
     let mut reach = vec![NONE; grid.len()];

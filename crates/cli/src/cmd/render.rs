@@ -44,8 +44,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             return Ok(crate::exit::BAD_INPUT);
         }
     };
-    if args.width == 0 || args.width > 8192 || args.height.is_some_and(|h| h == 0 || h > 8192) {
-        eprintln!("error: --width and --height must be between 1 and 8192");
+    if args.width == 0 || args.width > 4096 || args.height.is_some_and(|h| h == 0 || h > 4096) {
+        eprintln!("error: --width and --height must be between 1 and 4096");
         return Ok(crate::exit::BAD_INPUT);
     }
     let by_kind = |kind: AgentKind| world.agent_ids().find(|&a| world.agent(a).kind() == kind);
