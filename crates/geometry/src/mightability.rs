@@ -61,7 +61,7 @@ impl Default for MightabilityParams {
         MightabilityParams {
             cell: 0.05,
             ray_step_deg: 1.0,
-            body_ray_step_deg: 1.5,
+            body_ray_step_deg: 2.0,
             move_ray_step_deg: 2.0,
             move_stride: 3,
             margin: 0.5,
