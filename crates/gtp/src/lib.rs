@@ -11,3 +11,4 @@ pub mod search;
 pub mod solution;
 pub mod stats;
 pub mod task;
+pub mod verify;

@@ -273,8 +273,8 @@ impl Default for PlannerConfig {
             grasps: GraspCache::new(GraspParams::default()),
             placement: PlacementParams::default(),
             rrt: RrtParams::default(),
-            ik_attempts: 4,
-            ik_tries: 4,
+            ik_attempts: 3,
+            ik_tries: 3,
             visibility_resolution: 32,
             trace: std::env::var_os("GTP_TRACE").is_some(),
         }

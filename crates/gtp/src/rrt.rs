@@ -130,11 +130,11 @@ pub struct RrtParams {
 impl Default for RrtParams {
     fn default() -> Self {
         RrtParams {
-            resolution: 0.05,
+            resolution: 0.1,
             max_step: 0.6,
             max_nodes: 5000,
             time_limit: Duration::from_millis(500),
-            shortcut_iterations: 60,
+            shortcut_iterations: 30,
             certify_factor: 4,
         }
     }
@@ -433,14 +433,22 @@ pub fn plan(
                 tail.reverse();
                 waypoints.extend(tail);
                 stats.raw_waypoints = waypoints.len();
-                let mut path = JointPath { waypoints };
+                let raw = JointPath { waypoints };
+                let mut path = raw.clone();
                 shortcut(space, &mut path, params, &mut valid, rng, &mut stats.checks);
                 if params.certify_factor > 1 {
-                    let certified = path.waypoints.windows(2).all(|w| {
-                        edge_valid(space, &w[0], &w[1], fine, &mut valid, &mut stats.checks)
-                    });
-                    if !certified {
-                        return Err((RrtError::Certification(params.certify_factor), stats));
+                    let mut certify = |p: &JointPath, checks: &mut usize| {
+                        p.waypoints
+                            .windows(2)
+                            .all(|w| edge_valid(space, &w[0], &w[1], fine, &mut valid, checks))
+                    };
+                    if !certify(&path, &mut stats.checks) {
+                        // A shortcut cut a corner between the coarse checks: fall back to the
+                        // tree's own path, whose edges are short.
+                        path = raw;
+                        if !certify(&path, &mut stats.checks) {
+                            return Err((RrtError::Certification(params.certify_factor), stats));
+                        }
                     }
                 }
                 return Ok((path, stats));
@@ -452,8 +460,8 @@ pub fn plan(
 }
 
 /// Shortcut smoothing: repeatedly joins two random points of the path by a straight edge when
-/// that edge is valid, then drops waypoints made redundant. Shortcuts are checked at
-/// `resolution / certify_factor`: long straight edges are where corners get cut.
+/// that edge is valid, then drops waypoints made redundant. Shortcuts are checked at the
+/// search resolution; [`plan`] certifies the result at the finer one.
 pub fn shortcut(
     space: &JointSpace,
     path: &mut JointPath,
@@ -462,8 +470,8 @@ pub fn shortcut(
     rng: &mut fastrand::Rng,
     checks: &mut usize,
 ) {
-    let fine = params.resolution / params.certify_factor.max(1) as f32;
-    greedy_shortcut(space, path, fine, valid, checks);
+    let res = params.resolution;
+    greedy_shortcut(space, path, res, valid, checks);
     // Random shortcuts between points inside edges.
     let mut a = vec![0.0; space.dim()];
     let mut b = vec![0.0; space.dim()];
@@ -490,7 +498,7 @@ pub fn shortcut(
         if space.distance(&a, &b) >= old - 1e-4 {
             continue;
         }
-        if edge_valid(space, &a, &b, fine, valid, checks) {
+        if edge_valid(space, &a, &b, res, valid, checks) {
             let mut w: Vec<Vec<f32>> = path.waypoints[..=i].to_vec();
             w.push(a.clone());
             w.push(b.clone());
@@ -498,7 +506,7 @@ pub fn shortcut(
             path.waypoints = w;
         }
     }
-    greedy_shortcut(space, path, fine, valid, checks);
+    greedy_shortcut(space, path, res, valid, checks);
 }
 
 /// From each waypoint, jumps to the farthest later one reachable by a valid straight edge.

@@ -104,6 +104,9 @@ pub(crate) struct Search {
     oi: usize,
     failed_choices: HashSet<usize>,
     pick_cache: HashMap<usize, Option<PickPlan>>,
+    /// Per (level, point, orientation) of a placing task: the visibility reached when the
+    /// human-related constraints hold, `None` when they fail.
+    verdicts: HashMap<(usize, usize, usize), Option<Option<f32>>>,
     /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
     human_shoulders: HashMap<u8, Vec<Vector>>,
     deepest: Option<Stage>,
@@ -249,6 +252,7 @@ impl Search {
             oi: 0,
             failed_choices: HashSet::new(),
             pick_cache: HashMap::new(),
+            verdicts: HashMap::new(),
             human_shoulders: HashMap::new(),
             deepest: None,
             rejections: HashMap::new(),
@@ -390,10 +394,11 @@ impl Search {
                 continue;
             }
             let orient = self.orientations.as_ref().unwrap()[self.oi];
+            let oidx = self.oi;
             self.oi += 1;
             self.stats.orientations += 1;
             let point = self.points.as_ref().unwrap()[self.pi];
-            if let Some(sol) = self.try_tuple(self.ci, point, orient) {
+            if let Some(sol) = self.try_tuple(self.ci, point, orient, oidx) {
                 return Some(sol);
             }
         }
@@ -1012,6 +1017,19 @@ impl Search {
         })
     }
 
+    /// Whether the human reaches the object in `world` at effort `level` or lower, as the
+    /// `reachable` shared literal measures it (reach spheres confirmed by inverse kinematics).
+    fn human_reach_at_most(&mut self, world: &World, level: u8) -> bool {
+        let (Some(h), Some(o)) = (self.human, self.object) else {
+            return false;
+        };
+        let params = geometry::facts::FactParams {
+            max_effort: level,
+            ..Default::default()
+        };
+        geometry::facts::reachable_effort(world, h, o, &params).is_some_and(|l| l <= level)
+    }
+
     /// Visibility of the object for the human in `world` at effort `level` (the best over what
     /// the level allows: the head as it is, turned to the object, or the stances of level 2+).
     fn measure_visibility(&mut self, world: &World, level: u8) -> f32 {
@@ -1022,13 +1040,18 @@ impl Search {
         measure_visibility(world, h, o, level, self.cfg.visibility_resolution)
     }
 
-    fn try_tuple(&mut self, ci: usize, point: Vector, orient: Orientation) -> Option<Solution> {
+    fn try_tuple(
+        &mut self,
+        ci: usize,
+        point: Vector,
+        orient: Orientation,
+        oidx: usize,
+    ) -> Option<Solution> {
         let o = self.object?;
         let ch = self.choices[ci];
         let setup = self.setup.clone();
         let level = self.levels[self.li];
         let oname = self.object_name();
-        let hname = self.human_name();
         let kind = self.task.kind;
         let object_in_tool = ch.tool_in_object.inverse();
         let rrt = self.cfg.rrt.clone();
@@ -1046,6 +1069,12 @@ impl Search {
             after.attach_with_grasp(o, self.setup.agent, arm.tool_link, object_in_tool);
             let trajectories = self.pick_trajectories(ci, &plan);
             return Some(self.solution(after, ci, None, None, level, trajectories));
+        }
+        // A placement whose reach or visibility already failed fails for every grasp (the world
+        // after a placement does not depend on the grasp: the arm returns to where it was).
+        let verdict_key = (self.li, self.pi, oidx);
+        if !kind.hands_over() && self.verdicts.get(&verdict_key) == Some(&None) {
+            return None;
         }
         let tool = orient.pose * ch.tool_in_object;
         // Cheap: the gripper around the object at the placement.
@@ -1109,55 +1138,22 @@ impl Search {
             after.set_agent_config(robot, base, &self.q0_full);
             after.set_object_pose(o, orient.pose);
         }
-        // Exact reach of the final object position by the human.
-        let centre = after.object_aabb(o).center();
-        if let Some(k) = self.c.reach_within
-            && !self.human_reaches(centre, k.min(level.max(1)))
-        {
-            self.reject(Stage::Reach, || {
-                format!("no placement of `{oname}` is within {hname}'s reach")
-            });
-            return None;
-        }
-        if let Some(k) = self.c.unreachable_within
-            && self.human_reaches(centre, k)
-        {
-            self.reject(Stage::Reach, || {
-                format!("every placement of `{oname}` is within {hname}'s reach")
-            });
-            return None;
-        }
-        // Pixel visibility, the expensive test, last of the constraints.
-        let mut visibility = None;
-        if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
-            let vis_level = if self.c.max_visibility.is_some() {
-                self.c.max_effort
-            } else {
-                level
-            };
-            let v = self.measure_visibility(&after, vis_level);
-            visibility = Some(v);
-            if let Some(min) = self.c.min_visibility
-                && v < min
-            {
-                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.max(v)));
-                let best = self.best_visibility.unwrap();
-                self.reject(Stage::Visibility, || {
-                    format!("no placement of `{oname}` visible enough to {hname}: best visibility {best:.2} (needs >= {min:.2})")
-                });
-                return None;
+        let cached = if kind.hands_over() {
+            None
+        } else {
+            self.verdicts.get(&verdict_key).copied()
+        };
+        let visibility = match cached {
+            Some(Some(v)) => v,
+            Some(None) => return None,
+            None => {
+                let v = self.placement_verdict(&after, level);
+                if !kind.hands_over() {
+                    self.verdicts.insert(verdict_key, v);
+                }
+                v?
             }
-            if let Some(max) = self.c.max_visibility
-                && v > max
-            {
-                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
-                let best = self.best_visibility.unwrap();
-                self.reject(Stage::Visibility, || {
-                    format!("no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})")
-                });
-                return None;
-            }
-        }
+        };
         // Trajectories.
         let pick = if self.held {
             None
@@ -1326,6 +1322,62 @@ impl Search {
         ))
     }
 
+    /// The human-related constraints on the world after a tuple: reach, then pixel visibility
+    /// (the expensive test, last). `Some(visibility measured)` when they hold.
+    fn placement_verdict(&mut self, after: &World, level: u8) -> Option<Option<f32>> {
+        let oname = self.object_name();
+        let hname = self.human_name();
+        // Exact reach of the object by the human in the final world (the shared literal's test).
+        if let Some(k) = self.c.reach_within
+            && !self.human_reach_at_most(after, k.min(level.max(1)))
+        {
+            self.reject(Stage::Reach, || {
+                format!("no placement of `{oname}` is within {hname}'s reach")
+            });
+            return None;
+        }
+        if let Some(k) = self.c.unreachable_within
+            && self.human_reach_at_most(after, k)
+        {
+            self.reject(Stage::Reach, || {
+                format!("every placement of `{oname}` is within {hname}'s reach")
+            });
+            return None;
+        }
+        // Pixel visibility, the expensive test, last of the constraints.
+        let mut visibility = None;
+        if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
+            let vis_level = if self.c.max_visibility.is_some() {
+                self.c.max_effort
+            } else {
+                level
+            };
+            let v = self.measure_visibility(after, vis_level);
+            visibility = Some(v);
+            if let Some(min) = self.c.min_visibility
+                && v < min
+            {
+                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.max(v)));
+                let best = self.best_visibility.unwrap();
+                self.reject(Stage::Visibility, || {
+                    format!("no placement of `{oname}` visible enough to {hname}: best visibility {best:.2} (needs >= {min:.2})")
+                });
+                return None;
+            }
+            if let Some(max) = self.c.max_visibility
+                && v > max
+            {
+                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
+                let best = self.best_visibility.unwrap();
+                self.reject(Stage::Visibility, || {
+                    format!("no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})")
+                });
+                return None;
+            }
+        }
+        Some(visibility)
+    }
+
     fn support_under(&self, p: Vector) -> Option<String> {
         let mut best: Option<(f32, String)> = None;
         for id in self.world.object_ids() {
@@ -1428,9 +1480,12 @@ impl Search {
     ) -> Solution {
         let ch = self.choices[ci];
         let o = self.object.unwrap();
-        let reach_effort = self.human.and_then(|_| {
-            let c = after.object_aabb(o).center();
-            (0..=geometry::effort::MAX_EFFORT.min(3)).find(|&l| self.human_reaches(c, l))
+        let reach_effort = self.human.and_then(|h| {
+            let params = geometry::facts::FactParams {
+                max_effort: 3,
+                ..Default::default()
+            };
+            geometry::facts::reachable_effort(&after, h, o, &params)
         });
         let placement = placed.map(|(p, orient, support)| PlacementRecord {
             pose: orient.pose.into(),

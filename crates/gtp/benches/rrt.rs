@@ -1,0 +1,99 @@
+//! RRT-Connect queries in the library scene: the PR2's right arm between the configurations
+//! of a real make-accessible solution (approach to the grey book, carrying it to the desk, the
+//! arm's return), each planned from scratch with a fresh seed per iteration; plus one
+//! collision check for scale.
+//!
+//! Run: `cargo bench -p gtp --bench rrt`. Target: median < 1 ms per query.
+
+use std::hint::black_box;
+use std::sync::Arc;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use geometry::world::World;
+use gtp::planner::{CallOptions, Planner};
+use gtp::robot::{self, ArmMotion};
+use gtp::solution::Phase;
+
+fn library() -> World {
+    World::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../domains/library/scene.toml"
+    ))
+    .expect("library scene")
+}
+
+fn bench_rrt(c: &mut Criterion) {
+    let world = library();
+    let planner = Planner::new();
+    let solution = planner
+        .run(
+            &world,
+            "make-accessible",
+            &["grey-book", "member"],
+            &CallOptions::default(),
+        )
+        .expect("task")
+        .next()
+        .expect("a make-accessible solution in the library scene");
+    let setup = planner.robot(&world).unwrap();
+    let book = world.object_id("grey-book").unwrap();
+    let arm = setup
+        .arms
+        .iter()
+        .find(|a| a.name == solution.summary.grasp.as_ref().unwrap().arm)
+        .unwrap();
+    let base = world.agent_state(setup.agent).base;
+    let q0 = world.agent_state(setup.agent).q.clone();
+    let params = planner.config().rrt.clone();
+    let mut g = c.benchmark_group("rrt_connect");
+    for t in &solution.summary.trajectories {
+        let (obstacles, held) = match t.phase {
+            Phase::Approach => (robot::obstacles(&world, setup.agent, &[]), None),
+            Phase::Transfer => {
+                let h = t.held.as_ref().unwrap();
+                let held =
+                    robot::held_object(&world, &setup, arm, book, h.object_in_tool.into()).unwrap();
+                (robot::obstacles(&world, setup.agent, &[book]), Some(held))
+            }
+            Phase::Return => (robot::obstacles(&solution.world, setup.agent, &[]), None),
+            _ => continue,
+        };
+        let mut template = q0.clone();
+        robot::set_opening(&setup.model, arm, &mut template, t.gripper_opening);
+        let motion = ArmMotion::new(&setup, arm, Arc::new(obstacles), held, base, template);
+        let start = t.waypoints.first().unwrap().clone();
+        let goal = t.waypoints.last().unwrap().clone();
+        if std::env::var_os("RRT_STATS").is_some() {
+            for s in 0..5 {
+                let mut rng = fastrand::Rng::with_seed(s);
+                match motion.plan(&start, &goal, &params, &mut rng) {
+                    Ok((p, st)) => eprintln!(
+                        "{:?}: {} waypoints, length {:.2} (straight {:.2}), {st:?}",
+                        t.phase,
+                        p.waypoints.len(),
+                        p.length(&arm.space),
+                        arm.space.distance(&start, &goal)
+                    ),
+                    Err(e) => eprintln!("{:?}: {e}", t.phase),
+                }
+            }
+        }
+        let mut seed = 0u64;
+        g.bench_function(format!("{:?}", t.phase), |b| {
+            b.iter(|| {
+                seed += 1;
+                let mut rng = fastrand::Rng::with_seed(seed);
+                black_box(motion.plan(&start, &goal, &params, &mut rng).ok())
+            })
+        });
+        if t.phase == Phase::Approach {
+            g.bench_function("one collision check", |b| {
+                b.iter(|| black_box(motion.free(&start)))
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_rrt);
+criterion_main!(benches);

@@ -1,0 +1,162 @@
+//! Independent re-checks of a solution: replay its trajectories phase by phase in the world
+//! before the task, densified to a finer resolution than the planner used, with fresh
+//! collision checkers; and re-measure what the task promised in the world after it.
+//!
+//! Used by the tests and by `htngtp gtp --verify`.
+
+use std::sync::Arc;
+
+use geometry::collision::CollisionChecker;
+use geometry::scene::ObjectId;
+use geometry::world::World;
+use parry3d::math::Pose;
+
+use crate::gripper::Gripper;
+use crate::planner::Planner;
+use crate::robot::{self, set_arm_values, set_opening};
+use crate::rrt::{JointPath, JointSpace};
+use crate::solution::{Phase, SolutionSummary};
+
+/// Replays every trajectory of `summary` from `before`, checking each configuration at
+/// `resolution` (per joint) for collisions, under the rules each trajectory records (what it
+/// carries, what it ignores, what its open gripper straddles). Returns the first collision.
+pub fn recheck_trajectories(
+    planner: &Planner,
+    before: &World,
+    summary: &SolutionSummary,
+    resolution: f32,
+) -> Result<(), String> {
+    let setup = planner.robot(before).map_err(|e| e.to_string())?;
+    let robot_id = setup.agent;
+    let object: Option<ObjectId> = summary.args.first().and_then(|n| before.object_id(n));
+    let mut w = before.clone();
+    for (ti, t) in summary.trajectories.iter().enumerate() {
+        let at = |k: usize, why: String| {
+            format!("trajectory {ti} ({:?}), configuration {k}: {why}", t.phase)
+        };
+        if t.phase == Phase::Drive {
+            let q = w.agent_state(robot_id).q.clone();
+            let obstacles = Arc::new(robot::obstacles(&w, robot_id, &[]));
+            let mut checker = CollisionChecker::new(
+                setup.self_model.clone(),
+                obstacles,
+                w.agent_state(robot_id).base,
+            );
+            let space =
+                JointSpace::new(&[(-1e3, 1e3, false), (-1e3, 1e3, false), (0.0, 0.0, true)]);
+            let path = JointPath {
+                waypoints: t.waypoints.clone(),
+            };
+            for (k, b) in path.densify(&space, resolution).iter().enumerate() {
+                checker.set_base(geometry::world::base_pose(b[0], b[1], b[2]));
+                if let Some(c) = checker.first_collision(&q) {
+                    return Err(at(k, c.to_string()));
+                }
+            }
+            let last = t.waypoints.last().ok_or("empty trajectory")?;
+            w.set_agent_config(
+                robot_id,
+                geometry::world::base_pose(last[0], last[1], last[2]),
+                &q,
+            );
+            continue;
+        }
+        let arm = setup
+            .arms
+            .iter()
+            .find(|a| a.name == t.arm)
+            .ok_or_else(|| format!("trajectory {ti}: unknown arm `{}`", t.arm))?;
+        let mut skip: Vec<ObjectId> = Vec::new();
+        for name in &t.ignored {
+            if let Some(id) = w.object_id(name) {
+                skip.push(id);
+            }
+        }
+        if let Some(o) = object
+            && w.attachment(o).is_some()
+        {
+            skip.push(o);
+        }
+        let obstacles = robot::obstacles(&w, robot_id, &skip);
+        let held = match (&t.held, object) {
+            (Some(h), Some(o)) => Some(robot::held_object(
+                &w,
+                &setup,
+                arm,
+                o,
+                h.object_in_tool.into(),
+            )?),
+            _ => None,
+        };
+        let base = w.agent_state(robot_id).base;
+        // The object's own support may touch it while it is lifted off (`ignored` names it):
+        // then the robot is checked against everything, the held object against the rest.
+        let mut checkers = Vec::new();
+        if held.is_some() && !t.ignored.is_empty() {
+            let names: Vec<&str> = t.ignored.iter().map(String::as_str).collect();
+            let mut c = CollisionChecker::new(
+                setup.self_model.clone(),
+                Arc::new(obstacles.without(&names)),
+                base,
+            );
+            c.set_held_object(held);
+            checkers.push(c);
+            let all_but_object =
+                robot::obstacles(&w, robot_id, &object.into_iter().collect::<Vec<_>>());
+            checkers.push(CollisionChecker::new(
+                setup.self_model.clone(),
+                Arc::new(all_but_object),
+                base,
+            ));
+        } else {
+            let mut c = CollisionChecker::new(setup.self_model.clone(), Arc::new(obstacles), base);
+            c.set_held_object(held);
+            checkers.push(c);
+        }
+        let mut q = w.agent_state(robot_id).q.clone();
+        set_opening(&setup.model, arm, &mut q, t.gripper_opening);
+        let straddled = match (&t.straddles, object) {
+            (Some((_, pose)), Some(o)) => {
+                let pose: Pose = (*pose).into();
+                Some((w.object(o).shape.clone(), pose * w.object(o).shape_offset))
+            }
+            _ => None,
+        };
+        let gripper = Gripper::new(t.gripper_opening);
+        let path = JointPath {
+            waypoints: t.waypoints.clone(),
+        };
+        for (k, qa) in path.densify(&arm.space, resolution).iter().enumerate() {
+            set_arm_values(arm, &mut q, qa);
+            for checker in &checkers {
+                if let Some(c) = checker.first_collision(&q) {
+                    return Err(at(k, c.to_string()));
+                }
+            }
+            if let Some((shape, pose)) = &straddled {
+                let tool = setup.model.link_pose_by_id(base, &q, arm.tool_link);
+                if gripper.intersects(&tool, &**shape, pose) {
+                    return Err(at(k, "the gripper hits the object it straddles".into()));
+                }
+            }
+        }
+        // The world after this phase.
+        w.set_agent_config(robot_id, base, &q);
+        if let Some(o) = object {
+            match t.phase {
+                Phase::Grasp => {
+                    let next_held = summary
+                        .trajectories
+                        .get(ti + 1)
+                        .and_then(|n| n.held.clone());
+                    if let Some(h) = next_held {
+                        w.attach_with_grasp(o, robot_id, arm.tool_link, h.object_in_tool.into());
+                    }
+                }
+                Phase::Place => w.detach(o),
+                _ => {}
+            }
+        }
+    }
+    Ok(())
+}

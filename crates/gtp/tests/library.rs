@@ -1,0 +1,301 @@
+//! The paper's tasks in the library scene, each solution checked from scratch: trajectories
+//! replayed at 4x the planner's resolution, the promised visibility and reach re-measured in
+//! the world after the task with the `geometry` crate's own functions.
+
+use geometry::facts::{FactParams, on, reachable_effort};
+use geometry::scene::{AgentId, ObjectId};
+use geometry::visibility::{Aim, visibility_for_agent};
+use geometry::world::World;
+use gtp::planner::{CallOptions, GtpError, Planner, Solution};
+use gtp::verify::recheck_trajectories;
+
+fn library() -> World {
+    World::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../domains/library/scene.toml"
+    ))
+    .expect("library scene")
+}
+
+fn first(planner: &Planner, world: &World, task: &str, args: &[&str]) -> Solution {
+    let mut stream = planner
+        .run(world, task, args, &CallOptions::seeded(3))
+        .expect("task resolves");
+    match stream.next() {
+        Some(s) => s,
+        None => panic!("{task} {args:?} failed: {}", stream.failure().unwrap()),
+    }
+}
+
+/// The trajectories are collision-free at 4x the planner's resolution.
+fn recheck(planner: &Planner, before: &World, s: &Solution) {
+    let res = planner.config().rrt.resolution / 4.0;
+    assert!(!s.summary.trajectories.is_empty());
+    recheck_trajectories(planner, before, &s.summary, res)
+        .unwrap_or_else(|e| panic!("{:?} {:?}: {e}", s.summary.task, s.summary.args));
+}
+
+/// Visibility of `o` for `h` with the head as it is and turned to it (effort levels 0 and 1).
+fn visibility(planner: &Planner, w: &World, h: AgentId, o: ObjectId) -> (f32, f32) {
+    let res = planner.config().visibility_resolution;
+    (
+        visibility_for_agent(w, h, o, Aim::Current, res).fraction(),
+        visibility_for_agent(w, h, o, Aim::AtTarget, res).fraction(),
+    )
+}
+
+fn reach_within(w: &World, h: AgentId, o: ObjectId, level: u8) -> Option<u8> {
+    let params = FactParams {
+        max_effort: level,
+        ..FactParams::default()
+    };
+    reachable_effort(w, h, o, &params)
+}
+
+/// The object rests free of every other object (it may touch nothing but air and its support
+/// gap of 1 cm).
+fn rests_free(w: &World, o: ObjectId) {
+    let pose = w.object_shape_pose(o);
+    let shape = &w.object(o).shape;
+    for other in w.object_ids().filter(|&x| x != o) {
+        let hit = parry3d::query::intersection_test(
+            &pose,
+            &**shape,
+            &w.object_shape_pose(other),
+            &*w.object(other).shape,
+        )
+        .unwrap()
+        .intersecting;
+        assert!(
+            !hit,
+            "{} intersects {}",
+            w.object(o).name,
+            w.object(other).name
+        );
+    }
+}
+
+#[test]
+fn make_accessible_show_give_and_put_away_the_grey_book() {
+    let world = library();
+    let planner = Planner::new();
+    let book = world.object_id("grey-book").unwrap();
+    let member = world.agent_id("member").unwrap();
+    let robot = world.agent_id("pr2").unwrap();
+
+    let s = first(
+        &planner,
+        &world,
+        "make-accessible",
+        &["grey-book", "member"],
+    );
+    recheck(&planner, &world, &s);
+    let (v0, v1) = visibility(&planner, &s.world, member, book);
+    assert!(v0.max(v1) >= 0.5, "visibility {v0} / {v1}");
+    assert!(reach_within(&s.world, member, book, 1).is_some());
+    assert!(s.world.attachment(book).is_none());
+    rests_free(&s.world, book);
+    assert!(s.summary.placement.as_ref().unwrap().support.is_some());
+
+    for task in ["show", "give"] {
+        let s = first(&planner, &world, task, &["grey-book", "member"]);
+        recheck(&planner, &world, &s);
+        let (v0, v1) = visibility(&planner, &s.world, member, book);
+        assert!(v0.max(v1) >= 0.9, "{task}: visibility {v0} / {v1}");
+        assert_eq!(
+            s.world.attachment(book).map(|a| a.agent),
+            Some(robot),
+            "{task}: held"
+        );
+        if task == "give" {
+            assert!(
+                reach_within(&s.world, member, book, 1).is_some(),
+                "give: reach"
+            );
+        }
+    }
+
+    let s = first(&planner, &world, "put-away", &["grey-book", "member"]);
+    recheck(&planner, &world, &s);
+    let (v0, v1) = visibility(&planner, &s.world, member, book);
+    assert!(v0 <= 0.0 && v1 <= 0.0, "put-away: visibility {v0} / {v1}");
+    assert!(
+        reach_within(&s.world, member, book, 1).is_none(),
+        "put-away: reachable"
+    );
+    rests_free(&s.world, book);
+}
+
+#[test]
+fn put_away_the_pos_machine() {
+    let world = library();
+    let planner = Planner::new();
+    let pos = world.object_id("pos-machine").unwrap();
+    let member = world.agent_id("member").unwrap();
+    let s = first(&planner, &world, "put-away", &["pos-machine", "member"]);
+    recheck(&planner, &world, &s);
+    let (v0, v1) = visibility(&planner, &s.world, member, pos);
+    assert!(v0 <= 0.0 && v1 <= 0.0, "visibility {v0} / {v1}");
+    assert!(reach_within(&s.world, member, pos, 1).is_none());
+    rests_free(&s.world, pos);
+}
+
+#[test]
+fn pick_then_place_on_the_desk() {
+    let world = library();
+    let planner = Planner::new();
+    let book = world.object_id("grey-book").unwrap();
+    let desk = world.object_id("desk").unwrap();
+    let robot = world.agent_id("pr2").unwrap();
+    let picked = first(&planner, &world, "pick", &["grey-book"]);
+    recheck(&planner, &world, &picked);
+    assert_eq!(picked.world.attachment(book).map(|a| a.agent), Some(robot));
+    let lift = picked.world.object_pose(book).translation.z - world.object_pose(book).translation.z;
+    assert!(lift > 0.1, "lifted {lift} m");
+    // From the world after the pick, the held book goes onto the desk.
+    let placed = first(&planner, &picked.world, "place-on", &["grey-book", "desk"]);
+    recheck(&planner, &picked.world, &placed);
+    assert!(placed.world.attachment(book).is_none());
+    assert!(on(&placed.world, book, desk, 0.05));
+    rests_free(&placed.world, book);
+    // The grasp was kept: no pick phase in the second plan.
+    assert!(placed.summary.grasp.as_ref().unwrap().id.is_none());
+}
+
+#[test]
+fn make_accessible_streams_five_distinct_solutions() {
+    let world = library();
+    let planner = Planner::new();
+    let stream = planner
+        .run(
+            &world,
+            "make-accessible",
+            &["grey-book", "member"],
+            &CallOptions::seeded(5),
+        )
+        .unwrap();
+    let book = world.object_id("grey-book").unwrap();
+    let member = world.agent_id("member").unwrap();
+    let mut seen = Vec::new();
+    for s in stream.take(5) {
+        let p = s.summary.placement.clone().unwrap();
+        let key = (
+            s.summary.grasp.as_ref().unwrap().id,
+            s.summary.grasp.as_ref().unwrap().arm.clone(),
+            p.point.map(|c| (c * 1000.0).round() as i32),
+            p.orientation,
+            p.yaw_index,
+        );
+        assert!(!seen.contains(&key), "solution repeated: {key:?}");
+        seen.push(key);
+        let (v0, v1) = visibility(&planner, &s.world, member, book);
+        assert!(v0.max(v1) >= 0.5);
+    }
+    assert_eq!(seen.len(), 5);
+}
+
+#[test]
+fn an_impossible_task_names_the_constraint_that_stopped_it() {
+    // The member moved far away: nothing on a support is within their reach.
+    let mut world = library();
+    let planner = Planner::new();
+    let member = world.agent_id("member").unwrap();
+    let st = world.agent_state(member).clone();
+    let far = geometry::world::base_pose(6.0, 0.0, std::f32::consts::PI);
+    world.set_agent_config(member, far, &st.q);
+    let mut stream = planner
+        .run(
+            &world,
+            "make-accessible",
+            &["grey-book", "member"],
+            &CallOptions::seeded(1),
+        )
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert_eq!(f.constraint, "candidate-points", "{f}");
+    assert!(f.message.contains("reachable by member"), "{f}");
+    assert!(!f.limit);
+
+    // Nowhere to hide: out of the member's reach even when they may walk (effort level 4).
+    let world = library();
+    let mut stream = planner
+        .run(
+            &world,
+            "put-away",
+            &["grey-book", "member"],
+            &CallOptions::seeded(1).with("unreachable-within", "4"),
+        )
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert!(
+        ["candidate-points", "reachability"].contains(&f.constraint.as_str()),
+        "{f}"
+    );
+    assert!(f.message.contains("reach"), "{f}");
+    println!("{f}");
+}
+
+#[test]
+fn bad_calls_are_errors_with_the_reason() {
+    let world = library();
+    let planner = Planner::new();
+    let e = planner
+        .run(&world, "juggle", &["grey-book"], &CallOptions::default())
+        .err()
+        .unwrap();
+    assert!(matches!(e, GtpError::UnknownTask(_)));
+    let e = planner
+        .run(&world, "show", &["grey-book"], &CallOptions::default())
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("takes 2 argument"), "{e}");
+    let e = planner
+        .run(
+            &world,
+            "show",
+            &["blue-book", "member"],
+            &CallOptions::default(),
+        )
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("no such object"), "{e}");
+    let e = planner
+        .run(&world, "show", &["desk", "member"], &CallOptions::default())
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("not movable"), "{e}");
+    let e = planner
+        .run(
+            &world,
+            "give",
+            &["grey-book", "pr2"],
+            &CallOptions::default(),
+        )
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("not a human"), "{e}");
+    let e = planner
+        .run(
+            &world,
+            "give",
+            &["grey-book", "member"],
+            &CallOptions::default().with("min-visibility", "2"),
+        )
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("fraction"), "{e}");
+}
+
+#[test]
+fn the_same_seed_gives_the_same_solution() {
+    let world = library();
+    let planner = Planner::new();
+    let a = first(&planner, &world, "give", &["grey-book", "member"]);
+    let b = first(&Planner::new(), &world, "give", &["grey-book", "member"]);
+    let (mut sa, mut sb) = (a.summary.clone(), b.summary.clone());
+    sa.stats.time_s = 0.0;
+    sb.stats.time_s = 0.0;
+    assert_eq!(sa, sb);
+}
