@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
+use geometry::effort::MAX_EFFORT;
 use geometry::facts::{FactParams, effort_table, relations};
+use geometry::mightability::{Mightability, MightabilityParams};
 use geometry::world::World;
 use serde::Serialize;
 
@@ -31,6 +33,10 @@ pub struct Args {
     /// Pixel grid (N x N) of each visibility query.
     #[arg(long, default_value_t = 64)]
     pub resolution: usize,
+    /// Also compute the mightability maps (5 cm grids per agent and effort level) and print how
+    /// many cells each agent sees and reaches per level, with the time taken.
+    #[arg(long)]
+    pub maps: bool,
 }
 
 #[derive(Serialize)]
@@ -126,6 +132,31 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         "Effort levels: 0 in view / in hand, 1 turn head / extend arm, 2 torso turn or lean \
          (robot: turn around), 3 stand up (robot: torso lift), 4 walk / drive."
     );
+    if args.maps {
+        let start = std::time::Instant::now();
+        let m = Mightability::compute(&world, &MightabilityParams::default());
+        let took = start.elapsed();
+        println!();
+        println!(
+            "Mightability maps: {} x {} x {} cells of {} m, computed in {:.2} s",
+            m.grid.dims[0],
+            m.grid.dims[1],
+            m.grid.dims[2],
+            m.grid.cell,
+            took.as_secs_f64()
+        );
+        for a in world.agent_ids() {
+            let name = world.agent(a).name().to_uppercase();
+            let row = |vis: bool| {
+                (0..=MAX_EFFORT)
+                    .map(|l| format!("E<={l}: {}", m.count(a, l, vis)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            println!("  {name} sees    {}", row(true));
+            println!("  {name} reaches {}", row(false));
+        }
+    }
     println!();
     println!("Relations:");
     if rel.is_empty() {
