@@ -120,6 +120,42 @@ fn bench(c: &mut Criterion) {
                 .count()
         })
     });
+    // Arm motion planning: only the right arm moves; the rest is cached.
+    let chain = model.chain("right_arm").expect("right_arm");
+    // Torso raised so that the arms clear the table top.
+    let mut template = model.default_configuration();
+    template.set("torso_lift_joint", 0.2).expect("in limits");
+    let template = template.into_vec();
+    assert!(checker.is_config_free(&template), "template must be free");
+    let mut arm_checker = checker.clone();
+    arm_checker.set_fixed_joints(&template, &chain.dofs);
+    let mut arm_free = Vec::new();
+    while arm_free.len() < 1000 {
+        let r = model.random_configuration(&mut rng).into_vec();
+        let mut q = template.clone();
+        for &d in &chain.dofs {
+            q[d] = r[d];
+        }
+        if checker.is_config_free(&q) {
+            arm_free.push(q);
+        }
+    }
+    g.bench_function("is_config_free/right_arm_free_1000_full", |b| {
+        b.iter(|| {
+            arm_free
+                .iter()
+                .filter(|q| checker.is_config_free(black_box(q)))
+                .count()
+        })
+    });
+    g.bench_function("is_config_free/right_arm_free_1000_fixed_joints", |b| {
+        b.iter(|| {
+            arm_free
+                .iter()
+                .filter(|q| arm_checker.is_config_free(black_box(q)))
+                .count()
+        })
+    });
     g.bench_function("forward_kinematics_1000", |b| {
         let mut poses = Vec::new();
         b.iter(|| {
@@ -132,7 +168,6 @@ fn bench(c: &mut Criterion) {
     g.finish();
 
     // Inverse kinematics on reachable poses (FK of random arm configurations).
-    let chain = model.chain("right_arm").expect("right_arm");
     let rest = model.default_configuration().into_vec();
     let targets: Vec<Pose> = random
         .iter()

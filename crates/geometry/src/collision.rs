@@ -302,6 +302,8 @@ pub struct SelfCollisionModel {
     shapes: Vec<ShapeEntry>,
     /// Shape index pairs to test for self-collision.
     pairs: Vec<(u16, u16)>,
+    /// 0, 1, .. shapes.len() - 1.
+    all_shapes: Vec<u16>,
     allowed: Vec<AllowedPair>,
 }
 
@@ -440,6 +442,7 @@ impl SelfCollisionModel {
         }
         SelfCollisionModel {
             model,
+            all_shapes: (0..shapes.len() as u16).collect(),
             shapes,
             pairs,
             allowed,
@@ -632,6 +635,35 @@ pub struct CollisionChecker {
     base: Pose,
     held: Option<HeldObject>,
     self_collision: bool,
+    fixed: Option<Arc<FixedJoints>>,
+}
+
+/// The cached, unmoving part of the agent when only some joints move (see
+/// [`CollisionChecker::set_fixed_joints`]).
+#[derive(Debug)]
+struct FixedJoints {
+    template: Vec<f32>,
+    moving_dofs: Vec<usize>,
+    moving_dof: Vec<bool>,
+    moving_link: Vec<bool>,
+    link_poses: Vec<Pose>,
+    shape_poses: Vec<Pose>,
+    shape_aabbs: Vec<Aabb>,
+    moving_shapes: Vec<u16>,
+    moving_pairs: Vec<(u16, u16)>,
+    /// Collisions among the unmoving shapes and between them and the obstacles.
+    static_hits: Vec<Hit>,
+}
+
+impl FixedJoints {
+    /// Whether `q` has the template's values on every unmoving joint.
+    fn matches(&self, q: &[f32]) -> bool {
+        q.len() == self.template.len()
+            && q.iter()
+                .zip(&self.template)
+                .zip(&self.moving_dof)
+                .all(|((a, b), m)| *m || a == b)
+    }
 }
 
 impl CollisionChecker {
@@ -647,6 +679,92 @@ impl CollisionChecker {
             base,
             held: None,
             self_collision: true,
+            fixed: None,
+        }
+    }
+
+    /// Speeds up checks of configurations that differ from `template` only in `moving_dofs`
+    /// (an arm moving while the base, torso, head and other arm stay put, as in arm motion
+    /// planning): the poses of the unmoving links, their shapes' AABBs and their collisions
+    /// with each other and with the obstacles are computed once here. Configurations that differ
+    /// from the template elsewhere are still checked in full, so answers never change, only
+    /// speed. Moving the base or switching self-collision recomputes the cache.
+    ///
+    /// # Panics
+    /// If `template.len()` is not the model's number of degrees of freedom or a dof index is
+    /// out of range.
+    pub fn set_fixed_joints(&mut self, template: &[f32], moving_dofs: &[usize]) {
+        self.fixed = None;
+        let model = &self.agent.model;
+        assert_eq!(template.len(), model.dof(), "template length");
+        let mut moving_dof = vec![false; model.dof()];
+        for &d in moving_dofs {
+            moving_dof[d] = true;
+        }
+        let mut moving_link = vec![false; model.links().len()];
+        for (j, joint) in model.joints().iter().enumerate() {
+            let dof = joint
+                .dof
+                .or_else(|| joint.mimic.and_then(|m| model.joints()[m.master].dof));
+            moving_link[j + 1] = moving_link[joint.parent] || dof.is_some_and(|d| moving_dof[d]);
+        }
+        let link_poses = model.link_poses(self.base, template);
+        let shapes = &self.agent.shapes;
+        let shape_poses: Vec<Pose> = shapes
+            .iter()
+            .map(|s| link_poses[s.link] * s.local_pose)
+            .collect();
+        let shape_aabbs = shapes
+            .iter()
+            .zip(&shape_poses)
+            .map(|(s, p)| s.shape.compute_aabb(p))
+            .collect();
+        let moving = |i: u16| moving_link[shapes[i as usize].link];
+        let moving_shapes = (0..shapes.len() as u16).filter(|&i| moving(i)).collect();
+        let moving_pairs = self
+            .agent
+            .pairs
+            .iter()
+            .copied()
+            .filter(|&(a, b)| moving(a) || moving(b))
+            .collect();
+        // Collisions of the unmoving part, found once with a full check of the template.
+        let mut static_hits = Vec::new();
+        let held = self.held.take();
+        self.check(template, |h| {
+            let unmoving = match h {
+                Hit::SelfPair(a, b) => !moving(a as u16) && !moving(b as u16),
+                Hit::Obstacle(s, _) => !moving(s as u16),
+                Hit::HeldObstacle(_) | Hit::HeldShape(_) => false,
+            };
+            if unmoving {
+                static_hits.push(h);
+            }
+            false
+        });
+        self.held = held;
+        self.fixed = Some(Arc::new(FixedJoints {
+            template: template.to_vec(),
+            moving_dofs: moving_dofs.to_vec(),
+            moving_dof,
+            moving_link,
+            link_poses,
+            shape_poses,
+            shape_aabbs,
+            moving_shapes,
+            moving_pairs,
+            static_hits,
+        }));
+    }
+
+    /// Drops the cache made by [`CollisionChecker::set_fixed_joints`].
+    pub fn clear_fixed_joints(&mut self) {
+        self.fixed = None;
+    }
+
+    fn refresh_fixed(&mut self) {
+        if let Some(f) = self.fixed.take() {
+            self.set_fixed_joints(&f.template, &f.moving_dofs);
         }
     }
 
@@ -664,11 +782,13 @@ impl CollisionChecker {
     /// Turns self-collision checks on or off (on by default).
     pub fn set_self_collision(&mut self, on: bool) {
         self.self_collision = on;
+        self.refresh_fixed();
     }
 
     /// Moves the agent's base.
     pub fn set_base(&mut self, base: Pose) {
         self.base = base;
+        self.refresh_fixed();
     }
 
     /// The agent's base pose.
@@ -769,24 +889,57 @@ impl CollisionChecker {
                 candidates,
             } = &mut *guard;
             let model = &self.agent.model;
-            model.link_poses_into(self.base, q, links);
             let shapes = &self.agent.shapes;
-            poses.clear();
-            aabbs.clear();
-            for s in shapes {
-                let p = links[s.link] * s.local_pose;
-                poses.push(p);
-                aabbs.push(s.shape.compute_aabb(&p));
-            }
-            // Agent against the scene: first the obstacles near the whole agent, then per shape.
-            if !self.obstacles.is_empty() && !aabbs.is_empty() {
-                let mut all = aabbs[0];
-                for b in &aabbs[1..] {
+            let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
+            let (moving, pairs): (&[u16], &[(u16, u16)]) = match fixed {
+                Some(f) => {
+                    for &h in &f.static_hits {
+                        if report(h) {
+                            return;
+                        }
+                    }
+                    links.clear();
+                    links.extend_from_slice(&f.link_poses);
+                    for (j, joint) in model.joints().iter().enumerate() {
+                        if f.moving_link[j + 1] {
+                            links[j + 1] =
+                                links[joint.parent] * joint.transform(model.joint_value(j, q));
+                        }
+                    }
+                    poses.clear();
+                    poses.extend_from_slice(&f.shape_poses);
+                    aabbs.clear();
+                    aabbs.extend_from_slice(&f.shape_aabbs);
+                    for &i in &f.moving_shapes {
+                        let (i, s) = (i as usize, &shapes[i as usize]);
+                        poses[i] = links[s.link] * s.local_pose;
+                        aabbs[i] = s.shape.compute_aabb(&poses[i]);
+                    }
+                    (&f.moving_shapes, &f.moving_pairs)
+                }
+                None => {
+                    model.link_poses_into(self.base, q, links);
+                    poses.clear();
+                    aabbs.clear();
+                    for s in shapes {
+                        let p = links[s.link] * s.local_pose;
+                        poses.push(p);
+                        aabbs.push(s.shape.compute_aabb(&p));
+                    }
+                    (&self.agent.all_shapes, &self.agent.pairs)
+                }
+            };
+            // Agent against the scene: first the obstacles near the moving shapes, then per shape.
+            if !self.obstacles.is_empty() && !moving.is_empty() {
+                let mut all = aabbs[moving[0] as usize];
+                for &i in &moving[1..] {
+                    let b = &aabbs[i as usize];
                     all.mins = all.mins.min(b.mins);
                     all.maxs = all.maxs.max(b.maxs);
                 }
                 self.obstacles.candidates(&all, candidates);
-                for (i, s) in shapes.iter().enumerate() {
+                for &i in moving {
+                    let (i, s) = (i as usize, &shapes[i as usize]);
                     for &o in candidates.iter() {
                         let o = o as usize;
                         let obstacle = &self.obstacles.obstacles[o];
@@ -806,7 +959,7 @@ impl CollisionChecker {
             }
             // Self-collision.
             if self.self_collision {
-                for &(a, b) in &self.agent.pairs {
+                for &(a, b) in pairs {
                     let (a, b) = (a as usize, b as usize);
                     let r = shapes[a].radius + shapes[b].radius;
                     if (poses[a].translation - poses[b].translation).length_squared() > r * r {

@@ -290,3 +290,71 @@ fn bvh_broad_phase_agrees_with_brute_force() {
     let fewer = c.obstacles().without(&["o1", "o2"]);
     assert_eq!(fewer.len(), 58);
 }
+
+/// With the unmoving joints cached, answers are the same as full checks, including collisions
+/// of the unmoving part and configurations that move other joints.
+#[test]
+fn fixed_joints_cache_gives_the_same_answers() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let mut template = model.default_configuration();
+    template
+        .set_many(&[("torso_lift_joint", 0.15), ("l_shoulder_lift_joint", -0.2)])
+        .unwrap();
+    let template = template.into_vec();
+    let left_tool = model
+        .link_pose(Pose::IDENTITY, &template, "l_gripper_tool_frame")
+        .unwrap()
+        .translation;
+    let obstacles = Arc::new(StaticObstacles::new(vec![
+        boxed(
+            "table",
+            Vector::new(0.95, 0.0, 0.36),
+            Vector::new(0.4, 0.6, 0.36),
+        ),
+        boxed(
+            "book",
+            Vector::new(0.8, -0.2, 0.75),
+            Vector::new(0.1, 0.07, 0.03),
+        ),
+        boxed(
+            "shelf",
+            Vector::new(0.2, 0.9, 0.8),
+            Vector::new(0.4, 0.15, 0.8),
+        ),
+        // Touches the left gripper in the template: an unmoving collision.
+        boxed("post", left_tool, Vector::new(0.05, 0.05, 0.05)),
+    ]));
+    let chain = model.chain("right_arm").unwrap();
+    let book = SharedShape::cuboid(0.1, 0.07, 0.03);
+    let held =
+        HeldObject::new(&model, "book", book, "r_gripper_tool_frame", Pose::IDENTITY).unwrap();
+    let full = CollisionChecker::new(m.clone(), obstacles, Pose::IDENTITY).with_held_object(held);
+    let mut fast = full.clone();
+    fast.set_fixed_joints(&template, &chain.dofs);
+    let mut rng = fastrand::Rng::with_seed(21);
+    let names = |v: Vec<Contact>| {
+        let mut v: Vec<String> = v.iter().map(|c| c.to_string()).collect();
+        v.sort();
+        v
+    };
+    let mut free = 0;
+    for k in 0..400 {
+        let r = model.random_configuration(&mut rng).into_vec();
+        let mut q = template.clone();
+        for &d in &chain.dofs {
+            q[d] = r[d];
+        }
+        if k % 10 == 0 {
+            q[model.dof_index("head_pan_joint").unwrap()] = 0.5; // not a moving joint
+        }
+        let expected = names(full.collisions(&q));
+        assert_eq!(names(fast.collisions(&q)), expected);
+        assert_eq!(fast.is_config_free(&q), full.is_config_free(&q));
+        assert!(expected.iter().any(|c| c.contains("post")), "{expected:?}");
+        let mut without_post = expected.clone();
+        without_post.retain(|c| !c.contains("post"));
+        free += without_post.is_empty() as usize;
+    }
+    assert!(free > 20, "free {free}");
+}
