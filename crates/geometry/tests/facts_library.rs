@@ -122,3 +122,25 @@ fn max_effort_caps_the_search() {
         Some(1)
     );
 }
+
+/// The desk beside the platform is another place where both reach a book.
+#[test]
+fn the_desk_in_front_of_the_member_is_shared_too() {
+    let mut world = library();
+    let book = world.object_id("white-book").unwrap();
+    let desk = world.object_id("desk").unwrap();
+    let half_height = world.object_pose(book).translation.z - world.object_aabb(book).mins.z;
+    let mut pose = world.object_pose(book);
+    pose.translation = parry3d::math::Vector::new(0.13, -0.02, 0.75 + half_height + 0.002);
+    world.set_object_pose(book, pose);
+    let params = FactParams::default();
+    let member = world.agent_id("member").unwrap();
+    let pr2 = world.agent_id("pr2").unwrap();
+    let v = geometry::facts::visible_effort(&world, member, book, &params);
+    let r = geometry::facts::reachable_effort(&world, member, book, &params);
+    assert!(v.is_some_and(|v| v <= 1), "member Vis {v:?}");
+    assert!(r.is_some_and(|r| r <= 1), "member Reach {r:?}");
+    let r = geometry::facts::reachable_effort(&world, pr2, book, &params);
+    assert!(r.is_some_and(|r| r <= 1), "pr2 Reach {r:?}");
+    assert!(geometry::facts::on(&world, book, desk, 0.05));
+}
