@@ -37,6 +37,9 @@ use crate::world::{BodyOwner, World, WorldModel};
 /// A cell no effort level reaches.
 pub const NONE: u8 = u8::MAX;
 
+/// Most cells a grid may have (16 M: 16 MB per map); larger regions get coarser cells.
+pub const MAX_CELLS: usize = 1 << 24;
+
 /// Parameters of the maps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MightabilityParams {
@@ -424,7 +427,12 @@ impl Mightability {
                 b.maxs + m,
             )
         });
-        let grid = Grid::new(&bounds, params.cell);
+        // Keep the grid within MAX_CELLS: a huge room gets coarser cells rather than
+        // exhausting memory.
+        let ext = bounds.maxs - bounds.mins;
+        let volume = (ext.x * ext.y * ext.z).max(0.0);
+        let cell = params.cell.max((volume / MAX_CELLS as f32).cbrt());
+        let grid = Grid::new(&bounds, cell);
         let bodies = world.bodies();
         let owners: Vec<BodyOwner> = bodies.iter().map(|b| b.owner).collect();
         // Occupancy per owner group: objects, then each agent.

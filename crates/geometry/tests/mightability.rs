@@ -104,3 +104,21 @@ fn library_maps_agree_with_the_exact_facts_on_the_books() {
         );
     }
 }
+
+#[test]
+fn huge_rooms_get_coarser_cells() {
+    let text = r#"
+[scene]
+bounds = { min = [-500, -500, 0], max = [500, 500, 10] }
+[[objects]]
+name = "box"
+shape = { box = [1, 1, 1] }
+pose = { xyz = [0, 0, 1] }
+"#;
+    let w = World::from_scene(Scene::from_str(text, "big.toml", Path::new("."), "big").unwrap())
+        .unwrap();
+    let m = Mightability::compute(&w, &MightabilityParams::default());
+    assert!(m.grid.len() <= geometry::mightability::MAX_CELLS + 3 * 1024 * 1024);
+    assert!(m.grid.cell > 0.05);
+    assert!(m.occupied.count() > 0);
+}
