@@ -48,6 +48,8 @@ enum Command {
     Render(cmd::render::Args),
     /// Print the shared literals a scene makes true (visible, reachable, on, inside, covered-by).
     Facts(cmd::facts::Args),
+    /// Run one geometric task (pick, show, give, make-accessible, put-away, ...) in a scene.
+    Gtp(cmd::gtp::Args),
     /// Serve the 3D web viewer and a plan JSON on 127.0.0.1, and print the URL to open.
     View(cmd::view::Args),
 }
@@ -73,6 +75,7 @@ fn main() -> ExitCode {
         Command::BenchHddl(args) => cmd::bench_hddl::run(args),
         Command::Render(args) => cmd::render::run(args),
         Command::Facts(args) => cmd::facts::run(args),
+        Command::Gtp(args) => cmd::gtp::run(args),
         Command::View(args) => cmd::view::run(args),
     };
     match result {

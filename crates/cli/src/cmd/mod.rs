@@ -5,6 +5,7 @@ pub mod bench_hddl;
 pub mod demo;
 pub mod facts;
 pub mod geo;
+pub mod gtp;
 pub mod plan;
 pub mod render;
 pub mod validate;
