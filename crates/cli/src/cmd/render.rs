@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
+use geometry::effort::aim_head;
 use geometry::render::{Camera, agent_camera, render};
 use geometry::scene::AgentKind;
 use geometry::world::World;
@@ -34,6 +35,10 @@ pub struct Args {
     /// Image height in pixels (default: from the view's aspect ratio).
     #[arg(long)]
     pub height: Option<usize>,
+    /// With an agent's view: turn its head towards this object first (within the joint
+    /// limits), as the visibility test at effort level 1 does.
+    #[arg(long, value_name = "OBJECT")]
+    pub look_at: Option<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
@@ -61,6 +66,19 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             )
         })?),
     };
+    let mut world = world;
+    if let Some(name) = &args.look_at {
+        let Some(a) = agent else {
+            anyhow::bail!("--look-at needs an agent's view (human, robot or a name), not `top`");
+        };
+        let o = world
+            .object_id(name)
+            .with_context(|| format!("--look-at: no object `{name}` in the scene"))?;
+        let st = world.agent_state(a).clone();
+        let mut q = st.q.clone();
+        aim_head(&world, a, st.base, &mut q, world.object_aabb(o).center());
+        world.set_agent_config(a, st.base, &q);
+    }
     let (camera, height) = match agent {
         Some(a) => {
             let cam = agent_camera(&world, a);
