@@ -18,9 +18,14 @@ const FX_K: u64 = 0xf135_7aea_2e62_a9c5;
 
 impl Hasher for FxHasher {
     fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.write_u64(u64::from_le_bytes(c.try_into().expect("8 bytes")));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
             let mut buf = [0u8; 8];
-            buf[..chunk.len()].copy_from_slice(chunk);
+            buf[..rest.len()].copy_from_slice(rest);
             self.write_u64(u64::from_le_bytes(buf));
         }
     }

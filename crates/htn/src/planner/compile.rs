@@ -81,6 +81,8 @@ pub(crate) struct CMethod {
     pub task: u32,
     pub task_args: Vec<CTerm>,
     pub n_params: usize,
+    /// The parameter slots, `0..n_params`.
+    pub params: Vec<u16>,
     pub slot_types: Vec<u32>,
     /// Precondition and constraints as one conjunction.
     pub pre: Vec<CLit>,
@@ -123,8 +125,11 @@ pub(crate) struct Compiled {
     pub goal_slot_types: Vec<u32>,
     /// Predicates no action changes.
     pub static_preds: Vec<bool>,
-    /// Ground literals of the goal's top-level conjunction (at most 64): fact key and sign.
+    /// Ground literals of the goal's top-level conjunction and their landmarks (at most 64):
+    /// fact key and sign.
     pub goal_lits: Vec<(Vec<u32>, bool)>,
+    /// For a landmark, the literal that needs it (its only achiever requires it).
+    pub goal_parent: Vec<Option<usize>>,
     /// Per task, the goal literals (bits of `goal_lits`) it may make true.
     pub task_goal_mask: Vec<u64>,
 }
@@ -169,6 +174,7 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
             goal_slot_types: Vec::new(),
             static_preds: Vec::new(),
             goal_lits: Vec::new(),
+            goal_parent: Vec::new(),
             task_goal_mask: Vec::new(),
         },
         type_ids: HashMap::new(),
@@ -226,9 +232,6 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
     )?;
     b.c.root_method = b.c.methods.len() as u32;
     b.c.methods.push(root);
-    b.c.static_preds = static_predicates(&b.c);
-    pull_up(&mut b.c);
-    goal_relevance(&mut b.c);
     for f in &problem.init {
         let p = b.pred(&f.predicate)?;
         let args = f
@@ -254,6 +257,9 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
     let goal = b.formula(&problem.goal, &mut scope)?;
     b.c.goal = goal;
     b.c.goal_slot_types = scope.types;
+    b.c.static_preds = static_predicates(&b.c);
+    pull_up(&mut b.c);
+    goal_relevance(&mut b.c);
     Ok(b.c)
 }
 
@@ -603,6 +609,7 @@ impl Builder<'_> {
             task: task_id,
             task_args,
             n_params: params.len(),
+            params: (0..params.len() as u16).collect(),
             slot_types: scope.types,
             pre,
             subtasks: subs,
@@ -879,6 +886,53 @@ fn goal_relevance(c: &mut Compiled) {
             }
         }
     }
+    // Landmarks: when a positive literal has a single achiever, an action without parameters,
+    // that action's ground positive preconditions must hold at some point before it.
+    let mut parent: Vec<Option<usize>> = vec![None; lits.len()];
+    let mut i = 0;
+    while i < lits.len() {
+        if lits[i].1 {
+            let p = lits[i].0[0];
+            let achievers: Vec<&CAction> = c
+                .actions
+                .iter()
+                .filter(|a| {
+                    adds_pred(&a.effects, p)
+                        || (a.evaluable.is_some() && c.shared_preds[p as usize])
+                })
+                .collect();
+            if let [a] = achievers[..]
+                && a.n_params == 0
+            {
+                for l in &a.pre {
+                    if let CFormula::Atom(q, args) = &l.f
+                        && lits.len() < 64
+                    {
+                        let mut key = vec![*q];
+                        if args.iter().all(|t| match t {
+                            CTerm::Obj(o) => {
+                                key.push(*o);
+                                true
+                            }
+                            CTerm::Var(_) => false,
+                        }) && !lits.iter().any(|(k, pos)| *pos && *k == key)
+                        {
+                            lits.push((key, true));
+                            parent.push(Some(i));
+                        }
+                    }
+                }
+            }
+        }
+        i += 1;
+    }
+    fn adds_pred(effs: &[CEffect], p: u32) -> bool {
+        effs.iter().any(|e| match e {
+            CEffect::Add(q, _) => *q == p,
+            CEffect::Forall(_, inner) | CEffect::When(_, inner) => adds_pred(inner, p),
+            _ => false,
+        })
+    }
     fn effect_mask(effs: &[CEffect], lits: &[(Vec<u32>, bool)], m: &mut u64) {
         for e in effs {
             match e {
@@ -928,5 +982,6 @@ fn goal_relevance(c: &mut Compiled) {
         }
     }
     c.goal_lits = lits;
+    c.goal_parent = parent;
     c.task_goal_mask = mask;
 }

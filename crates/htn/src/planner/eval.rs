@@ -142,22 +142,31 @@ impl Eval<'_> {
         done: &mut [bool],
         cb: &mut dyn FnMut(&[u32]) -> bool,
     ) -> bool {
-        // Test every literal that is fully bound.
-        let mut tested: Vec<usize> = Vec::new();
+        // Test every literal that is fully bound (remember which, to unmark them after).
+        let mut tested_mask: u64 = 0;
+        let mut tested_more: Vec<usize> = Vec::new();
+        let mut ok = true;
         for (i, l) in lits.iter().enumerate() {
             if !done[i] && l.vars.iter().all(|&v| b[v as usize] != UNBOUND) {
                 if !self.holds(&l.f, b) {
-                    for &j in &tested {
-                        done[j] = false;
-                    }
-                    return false;
+                    ok = false;
+                    break;
                 }
                 done[i] = true;
-                tested.push(i);
+                if i < 64 {
+                    tested_mask |= 1 << i;
+                } else {
+                    tested_more.push(i);
+                }
             }
         }
-        let stop = self.extend(lits, b, need, done, cb);
-        for &j in &tested {
+        let stop = ok && self.extend(lits, b, need, done, cb);
+        let mut m = tested_mask;
+        while m != 0 {
+            done[m.trailing_zeros() as usize] = false;
+            m &= m - 1;
+        }
+        for j in tested_more {
             done[j] = false;
         }
         stop

@@ -9,13 +9,66 @@ use crate::oracle::{GeoSolution, GeometricOracle, OracleError, StreamId};
 use crate::plan::{Decomposition, GeoStep, Plan, PlanAction};
 use crate::state::{FxHasher, Interner, State, mix64};
 
-use super::compile::{CTerm, Compiled};
+use super::compile::{CEffect, CFormula, CTerm, Compiled};
 use super::eval::{EffectBuf, Eval, UNBOUND};
 use super::{
     Limit, Outcome, PlanError, PlannerOptions, SearchResult, SearchStats, Strategy, current_rss_kb,
 };
 
 const NIL: u32 = u32::MAX;
+
+/// An unknown argument in a partially ground task (only in goal-relevance reasoning).
+const WILD: u32 = u32::MAX;
+
+/// Whether `f` is a literal over static facts (or equality).
+fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
+    match f {
+        CFormula::Atom(p, _) => c.static_preds[*p as usize],
+        CFormula::Eq(..) => true,
+        CFormula::Not(x) => is_static_lit(c, x),
+        _ => false,
+    }
+}
+
+/// The goal literals an action with arguments `args` (some may be `WILD`) may achieve.
+fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32]) -> u64 {
+    let mut m = 0u64;
+    for e in effs {
+        match e {
+            CEffect::Add(p, terms) | CEffect::Del(p, terms) => {
+                let add = matches!(e, CEffect::Add(..));
+                for (i, (k, pos)) in c.goal_lits.iter().enumerate() {
+                    if k[0] != *p || *pos != add {
+                        continue;
+                    }
+                    let fits = terms.iter().zip(&k[1..]).all(|(t, &want)| match *t {
+                        CTerm::Obj(o) => o == want,
+                        CTerm::Var(v) => match args.get(v as usize) {
+                            Some(&a) => a == WILD || a == want,
+                            None => true,
+                        },
+                    });
+                    if fits {
+                        m |= 1 << i;
+                    }
+                }
+            }
+            CEffect::Forall(vs, inner) => {
+                // Quantified slots are unknown.
+                let mut a2 = args.to_vec();
+                for (slot, _) in vs {
+                    if (*slot as usize) < a2.len() {
+                        a2[*slot as usize] = WILD;
+                    }
+                }
+                m |= ground_effect_mask(c, inner, &a2);
+            }
+            CEffect::When(_, inner) => m |= ground_effect_mask(c, inner, args),
+            CEffect::Num(..) => {}
+        }
+    }
+    m
+}
 
 /// One cell of the persistent task-network stack.
 #[derive(Clone, Copy)]
@@ -157,6 +210,8 @@ pub(crate) struct Search<'a, 'o> {
     forced: VecDeque<Key>,
     repair: Option<Repair>,
     salt: u64,
+    /// Per (partially) ground task: 0 unknown, 1 being computed, 2 known; and its goal mask.
+    may_memo: Vec<(u8, u64)>,
 }
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -211,6 +266,7 @@ impl<'a, 'o> Search<'a, 'o> {
             forced: VecDeque::new(),
             repair: None,
             salt,
+            may_memo: Vec::new(),
         })
     }
 
@@ -377,14 +433,133 @@ impl<'a, 'o> Search<'a, 'o> {
         false
     }
 
-    /// Whether every goal literal that is false now may still be achieved by the network
-    /// whose tasks may achieve `may`.
+    /// Whether every goal literal (or landmark still needed) that is false now may still be
+    /// achieved by the network whose tasks may achieve `may`.
     fn goal_reachable(&self, may: u64) -> bool {
-        self.c
-            .goal_lits
-            .iter()
-            .enumerate()
-            .all(|(i, (key, pos))| may & (1 << i) != 0 || self.state.holds(key) == *pos)
+        let lits = &self.c.goal_lits;
+        if lits.is_empty() {
+            return true;
+        }
+        let mut sat: u64 = 0;
+        for (i, (key, pos)) in lits.iter().enumerate() {
+            if self.state.holds(key) == *pos {
+                sat |= 1 << i;
+            }
+        }
+        (0..lits.len()).all(|i| {
+            if sat & (1 << i) != 0 || may & (1 << i) != 0 {
+                return true;
+            }
+            // A landmark is needed only while every literal it serves is still false.
+            let mut p = self.c.goal_parent[i];
+            while let Some(j) = p {
+                if sat & (1 << j) != 0 {
+                    return true;
+                }
+                p = self.c.goal_parent[j];
+            }
+            false
+        })
+    }
+
+    /// The goal literals (bits of `goal_lits`) that ground task `gt` may achieve, through the
+    /// methods whose task arguments and static preconditions fit its arguments. Arguments may
+    /// be `WILD` (unknown). Memoised; a task met again while it is being computed counts with
+    /// its lifted mask (an over-approximation, so the pruning stays sound).
+    fn may_achieve(&mut self, gt: u32) -> u64 {
+        if self.c.goal_lits.is_empty() {
+            return 0;
+        }
+        let n = self.gtasks.len();
+        if self.may_memo.len() < n {
+            self.may_memo.resize(n, (0, 0));
+        }
+        let c = self.c;
+        let key = self.gtasks.key(gt).to_vec();
+        let t = key[0] as usize;
+        match self.may_memo[gt as usize] {
+            (2, m) => return m,
+            (1, _) => return c.task_goal_mask[t],
+            _ => {}
+        }
+        self.may_memo[gt as usize] = (1, 0);
+        let args = &key[1..];
+        let lifted = c.task_goal_mask[t];
+        let mut m = 0u64;
+        if let Some(a) = c.tasks[t].action {
+            m = ground_effect_mask(c, &c.actions[a as usize].effects, args);
+            if c.actions[a as usize].evaluable.is_some() {
+                for (i, (k, _)) in c.goal_lits.iter().enumerate() {
+                    if c.shared_preds[k[0] as usize] {
+                        m |= 1 << i;
+                    }
+                }
+            }
+        } else {
+            let mut sub: Vec<u32> = Vec::new();
+            'methods: for &mi in &c.tasks[t].methods {
+                if m == lifted {
+                    break;
+                }
+                let method = &c.methods[mi as usize];
+                let mut b = vec![UNBOUND; method.slot_types.len()];
+                for (term, &a) in method.task_args.iter().zip(args) {
+                    match *term {
+                        CTerm::Obj(o) => {
+                            if a != WILD && a != o {
+                                continue 'methods;
+                            }
+                        }
+                        CTerm::Var(v) => {
+                            if a == WILD {
+                                continue;
+                            }
+                            let cur = b[v as usize];
+                            if cur == UNBOUND {
+                                if !c.is_of(a, method.slot_types[v as usize]) {
+                                    continue 'methods;
+                                }
+                                b[v as usize] = a;
+                            } else if cur != a {
+                                continue 'methods;
+                            }
+                        }
+                    }
+                }
+                // Static literals whose slots are all bound must hold.
+                let ev = Eval {
+                    c,
+                    s: &self.state,
+                    types: &method.slot_types,
+                };
+                for l in &method.pre {
+                    if is_static_lit(c, &l.f)
+                        && l.vars.iter().all(|&v| b[v as usize] != UNBOUND)
+                        && !ev.holds(&l.f, &mut b)
+                    {
+                        continue 'methods;
+                    }
+                }
+                for (st, sargs) in &method.subtasks {
+                    sub.clear();
+                    sub.push(*st);
+                    sub.extend(sargs.iter().map(|a| match *a {
+                        CTerm::Obj(o) => o,
+                        CTerm::Var(v) => {
+                            let x = b[v as usize];
+                            if x == UNBOUND { WILD } else { x }
+                        }
+                    }));
+                    let id = self.gtasks.intern(&sub);
+                    m |= self.may_achieve(id);
+                }
+            }
+        }
+        if self.may_memo.len() <= gt as usize {
+            self.may_memo.resize(gt as usize + 1, (0, 0));
+        }
+        self.may_memo[gt as usize] = (2, m);
+        m
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
@@ -466,7 +641,7 @@ impl<'a, 'o> Search<'a, 'o> {
             let n = &self.arena[next as usize];
             (n.len, n.hash, n.may)
         };
-        let may = may | self.c.task_goal_mask[self.gtasks.key(task)[0] as usize];
+        let may = may | self.may_achieve(task);
         let hash = mix64(h.rotate_left(7) ^ mix64(task as u64 ^ self.salt));
         self.arena.push(Cell {
             task,
@@ -521,7 +696,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
             }
         }
-        let need: Vec<u16> = (0..method.n_params as u16).collect();
+        let need = &method.params;
         let n = method.n_params;
         let mut out = Vec::new();
         let mut count = 0;
@@ -530,7 +705,7 @@ impl<'a, 'o> Search<'a, 'o> {
             s: &self.state,
             types: &method.slot_types,
         };
-        ev.solve(&method.pre, &mut b, &need, &mut |bb| {
+        ev.solve(&method.pre, &mut b, need, &mut |bb| {
             out.extend_from_slice(&bb[..n]);
             count += 1;
             false
