@@ -11,10 +11,10 @@ fn main() {
         println!("{c}");
     }
     for a in &setup.arms {
+        let dof = a.gripper_dof.map(|k| setup.model.dof_names()[k].clone());
         println!(
-            "{} gripper dof {:?}",
-            a.name,
-            a.gripper_dof.map(|k| setup.model.dof_names()[k].clone())
+            "{}: gripper joint {dof:?}, wrist to tool {:.3} m, wrist reach {:.3} m",
+            a.name, a.wrist_to_tool, a.wrist_reach
         );
     }
 }

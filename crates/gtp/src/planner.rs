@@ -261,6 +261,11 @@ pub struct PlannerConfig {
     /// Calls per target (from the current configuration, then from random ones) until one
     /// gives a collision-free solution.
     pub ik_tries: usize,
+    /// Inverse kinematics at a placement or hand-over pose: calls and attempts per call. Fewer
+    /// than for a grasp: there are many placements, and the search moves on to the next.
+    pub ik_place_tries: usize,
+    /// See `ik_place_tries`.
+    pub ik_place_attempts: usize,
     /// Pixel-visibility grid (rays per side).
     pub visibility_resolution: usize,
     /// Print every rejected candidate to stderr (for debugging a scene).
@@ -275,6 +280,8 @@ impl Default for PlannerConfig {
             rrt: RrtParams::default(),
             ik_attempts: 3,
             ik_tries: 3,
+            ik_place_tries: 1,
+            ik_place_attempts: 2,
             visibility_resolution: 32,
             trace: std::env::var_os("GTP_TRACE").is_some(),
         }

@@ -35,6 +35,22 @@ pub struct Arm {
     pub space: JointSpace,
     /// Names of those joints.
     pub joint_names: Vec<String>,
+    /// Distance from the wrist centre (the origin of the chain's second-to-last movable joint)
+    /// to the tool frame: fixed whatever the joint values.
+    pub wrist_to_tool: f32,
+    /// Upper bound of the distance from the first movable joint to the wrist centre (the sum of
+    /// the joint offsets in between): a wrist farther away is out of reach.
+    pub wrist_reach: f32,
+}
+
+impl Arm {
+    /// A necessary condition for the tool frame to reach `tool`: the wrist centre it implies
+    /// (back from the tool along its x axis) lies within the arm's reach from `shoulder` (the
+    /// first movable joint's world position). Cheap; inverse kinematics decides.
+    pub fn may_reach(&self, shoulder: Vector, tool: &Pose) -> bool {
+        let wrist = tool.translation - tool.rotation * Vector::X * self.wrist_to_tool;
+        (wrist - shoulder).length() <= self.wrist_reach + 1e-3
+    }
 }
 
 /// What the planner knows of the robot of a scene; built once per scene and shared.
@@ -86,7 +102,42 @@ impl RobotSetup {
                 .iter()
                 .map(|&k| model.dof_names()[k].clone())
                 .collect();
+            // Wrist geometry from the model: joints from the first movable one to the wrist.
+            let movable: Vec<usize> = chain
+                .joints
+                .iter()
+                .copied()
+                .filter(|&j| model.joints()[j].is_movable())
+                .collect();
+            let (wrist_to_tool, wrist_reach) = if movable.len() >= 3 {
+                let wrist_joint = movable[movable.len() - 2];
+                let q = model.default_configuration().into_vec();
+                let base = Pose::IDENTITY;
+                let wrist = model
+                    .link_pose_by_id(base, &q, model.joints()[wrist_joint].child)
+                    .translation;
+                let tool = model.link_pose_by_id(base, &q, tool_link).translation;
+                let first = chain
+                    .joints
+                    .iter()
+                    .position(|&j| j == movable[0])
+                    .unwrap_or(0);
+                let last = chain
+                    .joints
+                    .iter()
+                    .position(|&j| j == wrist_joint)
+                    .unwrap_or(0);
+                let reach: f32 = chain.joints[first + 1..=last]
+                    .iter()
+                    .map(|&j| model.joints()[j].origin.translation.length())
+                    .sum();
+                ((tool - wrist).length(), reach)
+            } else {
+                (0.0, f32::INFINITY)
+            };
             arms.push(Arm {
+                wrist_to_tool,
+                wrist_reach,
                 name: name.to_string(),
                 tool_link_name: model.links()[tool_link].name.clone(),
                 chain,
@@ -224,6 +275,28 @@ impl<'a> ArmMotion<'a> {
         let mut q = self.template.clone();
         set_arm_values(self.arm, &mut q, qa);
         q
+    }
+
+    /// World position of the arm's first movable joint (fixed while the arm moves).
+    pub fn shoulder(&self) -> Vector {
+        let first = self
+            .arm
+            .chain
+            .joints
+            .iter()
+            .copied()
+            .find(|&j| self.setup.model.joints()[j].is_movable());
+        match first {
+            Some(j) => {
+                let parent = self.setup.model.joints()[j].parent;
+                let p = self
+                    .setup
+                    .model
+                    .link_pose_by_id(self.base, &self.template, parent);
+                (p * self.setup.model.joints()[j].origin).translation
+            }
+            None => self.base.translation,
+        }
     }
 
     /// World pose of the tool frame for arm values `qa`.

@@ -57,7 +57,10 @@ struct Choice {
 /// The pick part of a plan, computed once per choice and reused across points.
 #[derive(Clone, Debug)]
 struct PickPlan {
-    approach: JointPath,
+    /// Planned only once a whole tuple needs it (the RRT is the costly part of a pick).
+    approach: Option<JointPath>,
+    /// Arm values at the pre-grasp.
+    q_pre: Vec<f32>,
     grasp: JointPath,
     lift: Vec<(JointPath, Vec<String>)>,
     /// Arm values after the lift.
@@ -388,7 +391,7 @@ impl Search {
                 self.oi = 0;
             }
             let norient = self.orientations.as_ref().map_or(0, Vec::len);
-            if self.oi >= norient {
+            if self.oi >= norient || self.failed_choices.contains(&self.ci) {
                 self.ci += 1;
                 self.choice_ready = false;
                 continue;
@@ -857,6 +860,12 @@ impl Search {
                 ch.grasp.width,
             )
             .ok()?;
+        if !open_wo.arm.may_reach(open_wo.shoulder(), &tool) {
+            self.reject(Stage::Pick, || {
+                format!("no grasp of `{oname}` is within the arm's reach")
+            });
+            return None;
+        }
         self.stats.ik_calls += 1;
         let held_ok = |qa: &[f32]| hold_empty.free(qa);
         let qg = match open_wo.ik_free(
@@ -921,16 +930,6 @@ impl Search {
             });
             return None;
         }
-        self.stats.planner_calls += 1;
-        let approach = match open_all.plan(&q0, &qpre, &rrt, &mut rng) {
-            Ok((p, _)) => p,
-            Err(e) => {
-                self.reject(Stage::Pick, || {
-                    format!("no collision-free approach to `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
         let mut grasp_path = back_path;
         grasp_path.waypoints.reverse();
         // Lift: first clear of what it rests on, then the rest with full checks.
@@ -1010,7 +1009,8 @@ impl Search {
         };
         let q_lift = lift2.waypoints.last().unwrap().clone();
         Some(PickPlan {
-            approach,
+            approach: None,
+            q_pre: qpre,
             grasp: grasp_path,
             lift: vec![(lift1, self.resting_on.clone()), (lift2, Vec::new())],
             q_lift,
@@ -1028,6 +1028,50 @@ impl Search {
             ..Default::default()
         };
         geometry::facts::reachable_effort(world, h, o, &params).is_some_and(|l| l <= level)
+    }
+
+    /// Plans the approach of choice `ci`'s pick (RRT-Connect from the current arm configuration
+    /// to the pre-grasp), once; on failure the choice is dropped for good.
+    fn ensure_approach(&mut self, ci: usize) -> bool {
+        let Some(Some(plan)) = self.pick_cache.get(&ci) else {
+            return self.held;
+        };
+        if plan.approach.is_some() {
+            return true;
+        }
+        let qpre = plan.q_pre.clone();
+        let ch = self.choices[ci];
+        let setup = self.setup.clone();
+        let arm = &setup.arms[ch.arm];
+        let q0 = robot::arm_values(arm, &self.q0_full);
+        let Ok(open_all) = self.motion(
+            &setup,
+            ch.arm,
+            self.obstacles_all.clone(),
+            None,
+            ch.grasp.opening,
+        ) else {
+            return false;
+        };
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        self.stats.planner_calls += 1;
+        match open_all.plan(&q0, &qpre, &self.cfg.rrt, &mut rng) {
+            Ok((p, _)) => {
+                if let Some(Some(plan)) = self.pick_cache.get_mut(&ci) {
+                    plan.approach = Some(p);
+                }
+                true
+            }
+            Err(e) => {
+                let oname = self.object_name();
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free approach to `{oname}`: {e}")
+                });
+                self.pick_cache.insert(ci, None);
+                self.failed_choices.insert(ci);
+                false
+            }
+        }
     }
 
     /// Visibility of the object for the human in `world` at effort `level` (the best over what
@@ -1058,6 +1102,9 @@ impl Search {
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
         let q0 = robot::arm_values(&self.setup.arms[ch.arm], &self.q0_full);
         if kind == TaskKind::Pick {
+            if !self.ensure_approach(ci) {
+                return None;
+            }
             let plan = self.pick_cache.get(&ci).cloned().flatten()?;
             let mut after = self.world.clone();
             let mut q = self.q0_full.clone();
@@ -1097,13 +1144,19 @@ impl Search {
             Some(p) => p.q_lift,
             None => q0.clone(),
         };
+        if !held_wo.arm.may_reach(held_wo.shoulder(), &tool) {
+            self.reject(Stage::Ik, || {
+                format!("no placement of `{oname}` is within the arm's reach")
+            });
+            return None;
+        }
         self.stats.ik_calls += 1;
         let any = |_: &[f32]| true;
         let qp = match held_wo.ik_free(
             tool,
             &seed,
-            self.cfg.ik_tries,
-            self.cfg.ik_attempts,
+            self.cfg.ik_place_tries,
+            self.cfg.ik_place_attempts,
             &any,
             &mut rng,
         ) {
@@ -1155,6 +1208,9 @@ impl Search {
             }
         };
         // Trajectories.
+        if !self.held && !self.ensure_approach(ci) {
+            return None;
+        }
         let pick = if self.held {
             None
         } else {
@@ -1439,7 +1495,9 @@ impl Search {
             self.trajectory(
                 Phase::Approach,
                 &arm,
-                p.approach.clone(),
+                p.approach.clone().unwrap_or_else(|| JointPath {
+                    waypoints: vec![p.q_pre.clone()],
+                }),
                 None,
                 ch.grasp.opening,
                 vec![],
