@@ -130,6 +130,11 @@ pub struct State {
     is_static: Vec<bool>,
     /// The facts of static predicates by (predicate, argument position, object).
     static_index: FxMap<(u32, u32, u32), Vec<u32>>,
+    /// Per fact, the watched positive / negative literal on it (`u32::MAX`: none).
+    watch_pos: Vec<u32>,
+    watch_neg: Vec<u32>,
+    /// Watched literals that are false now (one bit each).
+    unsat: Vec<u64>,
 }
 
 impl State {
@@ -147,6 +152,53 @@ impl State {
             salt,
             is_static: vec![false; n_preds],
             static_index: FxMap::default(),
+            watch_pos: Vec::new(),
+            watch_neg: Vec::new(),
+            unsat: Vec::new(),
+        }
+    }
+
+    /// Watches literals (fact key and sign; each at most once): [`State::unsat`] then tells
+    /// which are false, kept up to date by every change and undo.
+    pub fn watch(&mut self, lits: &[(Vec<u32>, bool)]) {
+        self.unsat = vec![0; lits.len().div_ceil(64)];
+        for (i, (key, positive)) in lits.iter().enumerate() {
+            let id = self.intern_fact(key) as usize;
+            if *positive {
+                self.watch_pos[id] = i as u32;
+            } else {
+                self.watch_neg[id] = i as u32;
+            }
+            if self.holds_id(id as u32) != *positive {
+                self.unsat[i / 64] |= 1 << (i % 64);
+            }
+        }
+    }
+
+    /// The watched literals that are false now, as a bitset.
+    #[inline]
+    pub fn unsat(&self) -> &[u64] {
+        &self.unsat
+    }
+
+    #[inline]
+    fn flip_watch(&mut self, id: u32, now_true: bool) {
+        let (p, n) = (self.watch_pos[id as usize], self.watch_neg[id as usize]);
+        if p != u32::MAX {
+            let (w, b) = (p as usize / 64, p % 64);
+            if now_true {
+                self.unsat[w] &= !(1 << b);
+            } else {
+                self.unsat[w] |= 1 << b;
+            }
+        }
+        if n != u32::MAX {
+            let (w, b) = (n as usize / 64, n % 64);
+            if now_true {
+                self.unsat[w] |= 1 << b;
+            } else {
+                self.unsat[w] &= !(1 << b);
+            }
         }
     }
 
@@ -200,6 +252,8 @@ impl State {
         let id = self.facts.intern(key);
         if id as usize >= self.pos.len() {
             self.pos.resize(id as usize + 1, u32::MAX);
+            self.watch_pos.resize(id as usize + 1, u32::MAX);
+            self.watch_neg.resize(id as usize + 1, u32::MAX);
             let words = (id as usize) / 64 + 1;
             if words > self.bits.len() {
                 self.bits.resize(words, 0);
@@ -240,6 +294,7 @@ impl State {
         self.pos[id as usize] = self.by_pred[pred].len() as u32;
         self.by_pred[pred].push(id);
         self.hash ^= self.fact_key(id);
+        self.flip_watch(id, true);
     }
 
     fn clear(&mut self, id: u32) {
@@ -254,6 +309,7 @@ impl State {
         }
         self.pos[id as usize] = u32::MAX;
         self.hash ^= self.fact_key(id);
+        self.flip_watch(id, false);
     }
 
     /// Makes fact `id` true, recording the change.

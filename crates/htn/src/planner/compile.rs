@@ -125,13 +125,13 @@ pub(crate) struct Compiled {
     pub goal_slot_types: Vec<u32>,
     /// Predicates no action changes.
     pub static_preds: Vec<bool>,
-    /// Ground literals of the goal's top-level conjunction and their landmarks (at most 64):
-    /// fact key and sign.
+    /// Ground literals of the goal's top-level conjunction and their landmarks: fact key and
+    /// sign (each once).
     pub goal_lits: Vec<(Vec<u32>, bool)>,
     /// For a landmark, the literal that needs it (its only achiever requires it).
     pub goal_parent: Vec<Option<usize>>,
     /// Per task, the goal literals (bits of `goal_lits`) it may make true.
-    pub task_goal_mask: Vec<u64>,
+    pub task_goal_mask: Vec<Vec<u64>>,
 }
 
 impl Compiled {
@@ -856,6 +856,9 @@ fn rename(f: &CFormula, args: &[CTerm]) -> Option<CFormula> {
     })
 }
 
+/// At most this many goal literals and landmarks are tracked.
+const MAX_GOAL_LITS: usize = 4096;
+
 /// The goal's ground top-level literals and, per task, which of them the task may achieve
 /// (an over-approximation through all its methods): a node whose remaining task network can
 /// achieve no false goal literal is a dead end.
@@ -871,7 +874,7 @@ fn goal_relevance(c: &mut Compiled) {
             f => (f, true),
         };
         if let CFormula::Atom(p, args) = atom
-            && lits.len() < 64
+            && lits.len() < MAX_GOAL_LITS
         {
             let mut key = vec![*p];
             let mut ground = true;
@@ -881,7 +884,7 @@ fn goal_relevance(c: &mut Compiled) {
                     CTerm::Var(_) => ground = false,
                 }
             }
-            if ground {
+            if ground && !lits.contains(&(key.clone(), positive)) {
                 lits.push((key, positive));
             }
         }
@@ -906,7 +909,7 @@ fn goal_relevance(c: &mut Compiled) {
             {
                 for l in &a.pre {
                     if let CFormula::Atom(q, args) = &l.f
-                        && lits.len() < 64
+                        && lits.len() < MAX_GOAL_LITS
                     {
                         let mut key = vec![*q];
                         if args.iter().all(|t| match t {
@@ -933,14 +936,14 @@ fn goal_relevance(c: &mut Compiled) {
             _ => false,
         })
     }
-    fn effect_mask(effs: &[CEffect], lits: &[(Vec<u32>, bool)], m: &mut u64) {
+    fn effect_mask(effs: &[CEffect], lits: &[(Vec<u32>, bool)], m: &mut [u64]) {
         for e in effs {
             match e {
                 CEffect::Add(p, _) | CEffect::Del(p, _) => {
                     let add = matches!(e, CEffect::Add(..));
                     for (i, (k, pos)) in lits.iter().enumerate() {
                         if k[0] == *p && *pos == add {
-                            *m |= 1 << i;
+                            m[i / 64] |= 1 << (i % 64);
                         }
                     }
                 }
@@ -949,7 +952,8 @@ fn goal_relevance(c: &mut Compiled) {
             }
         }
     }
-    let mut mask = vec![0u64; c.tasks.len()];
+    let words = lits.len().div_ceil(64);
+    let mut mask = vec![vec![0u64; words]; c.tasks.len()];
     for (t, task) in c.tasks.iter().enumerate() {
         if let Some(a) = task.action {
             let act = &c.actions[a as usize];
@@ -957,7 +961,7 @@ fn goal_relevance(c: &mut Compiled) {
             if act.evaluable.is_some() {
                 for (i, (k, _)) in lits.iter().enumerate() {
                     if c.shared_preds[k[0] as usize] {
-                        mask[t] |= 1 << i;
+                        mask[t][i / 64] |= 1 << (i % 64);
                     }
                 }
             }
@@ -966,10 +970,12 @@ fn goal_relevance(c: &mut Compiled) {
     loop {
         let mut changed = false;
         for t in 0..c.tasks.len() {
-            let mut m = mask[t];
+            let mut m = mask[t].clone();
             for &mi in &c.tasks[t].methods {
                 for (st, _) in &c.methods[mi as usize].subtasks {
-                    m |= mask[*st as usize];
+                    for (w, x) in m.iter_mut().zip(&mask[*st as usize]) {
+                        *w |= x;
+                    }
                 }
             }
             if m != mask[t] {

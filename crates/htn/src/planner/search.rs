@@ -30,9 +30,9 @@ fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
     }
 }
 
-/// The goal literals an action with arguments `args` (some may be `WILD`) may achieve.
-fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32]) -> u64 {
-    let mut m = 0u64;
+/// Adds to `m` the goal literals an action with arguments `args` (some may be `WILD`) may
+/// achieve.
+fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32], m: &mut [u64]) {
     for e in effs {
         match e {
             CEffect::Add(p, terms) | CEffect::Del(p, terms) => {
@@ -49,7 +49,7 @@ fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32]) -> u64 {
                         },
                     });
                     if fits {
-                        m |= 1 << i;
+                        m[i / 64] |= 1 << (i % 64);
                     }
                 }
             }
@@ -61,13 +61,12 @@ fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32]) -> u64 {
                         a2[*slot as usize] = WILD;
                     }
                 }
-                m |= ground_effect_mask(c, inner, &a2);
+                ground_effect_mask(c, inner, &a2, m);
             }
-            CEffect::When(_, inner) => m |= ground_effect_mask(c, inner, args),
+            CEffect::When(_, inner) => ground_effect_mask(c, inner, args, m),
             CEffect::Num(..) => {}
         }
     }
-    m
 }
 
 /// One cell of the persistent task-network stack.
@@ -84,8 +83,8 @@ struct Cell {
     hash: u64,
     /// The decomposition (index in the tree) that created this cell, or `NIL`.
     parent: u32,
-    /// The goal literals the network from this cell down may achieve.
-    may: u64,
+    /// The goal literals the network from this cell down may achieve (a mask id).
+    may: u32,
 }
 
 struct Step {
@@ -211,7 +210,65 @@ pub(crate) struct Search<'a, 'o> {
     repair: Option<Repair>,
     salt: u64,
     /// Per (partially) ground task: 0 unknown, 1 being computed, 2 known; and its goal mask.
-    may_memo: Vec<(u8, u64)>,
+    may_memo: Vec<(u8, u32)>,
+    masks: MaskTable,
+    /// Per task, the id of its lifted goal mask.
+    lifted_masks: Vec<u32>,
+}
+
+/// Interned bitsets over the goal literals, with memoised unions (cells share them).
+struct MaskTable {
+    words: usize,
+    masks: Vec<Box<[u64]>>,
+    ids: crate::state::FxMap<Box<[u64]>, u32>,
+    unions: crate::state::FxMap<u64, u32>,
+}
+
+impl MaskTable {
+    fn new(words: usize) -> MaskTable {
+        let mut t = MaskTable {
+            words,
+            masks: Vec::new(),
+            ids: Default::default(),
+            unions: Default::default(),
+        };
+        t.intern(&vec![0; words]);
+        t
+    }
+
+    /// The id of a mask; id 0 is the empty mask.
+    fn intern(&mut self, m: &[u64]) -> u32 {
+        if let Some(&id) = self.ids.get(m) {
+            return id;
+        }
+        let id = self.masks.len() as u32;
+        self.masks.push(m.into());
+        self.ids.insert(m.into(), id);
+        id
+    }
+
+    fn get(&self, id: u32) -> &[u64] {
+        &self.masks[id as usize]
+    }
+
+    fn union(&mut self, a: u32, b: u32) -> u32 {
+        if a == 0 || a == b {
+            return b;
+        }
+        if b == 0 {
+            return a;
+        }
+        let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
+        if let Some(&u) = self.unions.get(&key) {
+            return u;
+        }
+        let m: Vec<u64> = (0..self.words)
+            .map(|w| self.masks[a as usize][w] | self.masks[b as usize][w])
+            .collect();
+        let u = self.intern(&m);
+        self.unions.insert(key, u);
+        u
+    }
 }
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -243,6 +300,10 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         state.commit();
         state.index_static(&c.static_preds);
+        state.watch(&c.goal_lits);
+        let words = c.goal_lits.len().div_ceil(64);
+        let mut masks = MaskTable::new(words);
+        let lifted_masks = c.task_goal_mask.iter().map(|m| masks.intern(m)).collect();
         Ok(Search {
             c,
             opts: *opts,
@@ -267,6 +328,8 @@ impl<'a, 'o> Search<'a, 'o> {
             repair: None,
             salt,
             may_memo: Vec::new(),
+            masks,
+            lifted_masks,
         })
     }
 
@@ -434,39 +497,41 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     /// Whether every goal literal (or landmark still needed) that is false now may still be
-    /// achieved by the network whose tasks may achieve `may`.
-    fn goal_reachable(&self, may: u64) -> bool {
-        let lits = &self.c.goal_lits;
-        if lits.is_empty() {
+    /// achieved by the network whose tasks may achieve mask `may`.
+    fn goal_reachable(&self, may: u32) -> bool {
+        if self.c.goal_lits.is_empty() {
             return true;
         }
-        let mut sat: u64 = 0;
-        for (i, (key, pos)) in lits.iter().enumerate() {
-            if self.state.holds(key) == *pos {
-                sat |= 1 << i;
+        let unsat = self.state.unsat();
+        let may = self.masks.get(may);
+        for (w, (&u, &m)) in unsat.iter().zip(may).enumerate() {
+            let mut bad = u & !m;
+            while bad != 0 {
+                let i = w * 64 + bad.trailing_zeros() as usize;
+                bad &= bad - 1;
+                // A landmark is needed only while every literal it serves is still false.
+                let mut needed = true;
+                let mut p = self.c.goal_parent[i];
+                while let Some(j) = p {
+                    if unsat[j / 64] & (1 << (j % 64)) == 0 {
+                        needed = false;
+                        break;
+                    }
+                    p = self.c.goal_parent[j];
+                }
+                if needed {
+                    return false;
+                }
             }
         }
-        (0..lits.len()).all(|i| {
-            if sat & (1 << i) != 0 || may & (1 << i) != 0 {
-                return true;
-            }
-            // A landmark is needed only while every literal it serves is still false.
-            let mut p = self.c.goal_parent[i];
-            while let Some(j) = p {
-                if sat & (1 << j) != 0 {
-                    return true;
-                }
-                p = self.c.goal_parent[j];
-            }
-            false
-        })
+        true
     }
 
-    /// The goal literals (bits of `goal_lits`) that ground task `gt` may achieve, through the
-    /// methods whose task arguments and static preconditions fit its arguments. Arguments may
-    /// be `WILD` (unknown). Memoised; a task met again while it is being computed counts with
-    /// its lifted mask (an over-approximation, so the pruning stays sound).
-    fn may_achieve(&mut self, gt: u32) -> u64 {
+    /// The goal literals (a mask id) that ground task `gt` may achieve, through the methods
+    /// whose task arguments and static preconditions fit its arguments. Arguments may be
+    /// `WILD` (unknown). Memoised; a task met again while it is being computed counts with its
+    /// lifted mask (an over-approximation, so the pruning stays sound).
+    fn may_achieve(&mut self, gt: u32) -> u32 {
         if self.c.goal_lits.is_empty() {
             return 0;
         }
@@ -477,28 +542,28 @@ impl<'a, 'o> Search<'a, 'o> {
         let c = self.c;
         let key = self.gtasks.key(gt).to_vec();
         let t = key[0] as usize;
+        let lifted = self.lifted_masks[t];
         match self.may_memo[gt as usize] {
             (2, m) => return m,
-            (1, _) => return c.task_goal_mask[t],
+            (1, _) => return lifted,
             _ => {}
         }
         self.may_memo[gt as usize] = (1, 0);
         let args = &key[1..];
-        let lifted = c.task_goal_mask[t];
-        let mut m = 0u64;
+        let mut m = vec![0u64; self.masks.words];
         if let Some(a) = c.tasks[t].action {
-            m = ground_effect_mask(c, &c.actions[a as usize].effects, args);
+            ground_effect_mask(c, &c.actions[a as usize].effects, args, &mut m);
             if c.actions[a as usize].evaluable.is_some() {
                 for (i, (k, _)) in c.goal_lits.iter().enumerate() {
                     if c.shared_preds[k[0] as usize] {
-                        m |= 1 << i;
+                        m[i / 64] |= 1 << (i % 64);
                     }
                 }
             }
         } else {
             let mut sub: Vec<u32> = Vec::new();
             'methods: for &mi in &c.tasks[t].methods {
-                if m == lifted {
+                if *m == *self.masks.get(lifted) {
                     break;
                 }
                 let method = &c.methods[mi as usize];
@@ -551,15 +616,19 @@ impl<'a, 'o> Search<'a, 'o> {
                         }
                     }));
                     let id = self.gtasks.intern(&sub);
-                    m |= self.may_achieve(id);
+                    let sm = self.may_achieve(id);
+                    for (w, x) in m.iter_mut().zip(self.masks.get(sm)) {
+                        *w |= x;
+                    }
                 }
             }
         }
+        let id = self.masks.intern(&m);
         if self.may_memo.len() <= gt as usize {
             self.may_memo.resize(gt as usize + 1, (0, 0));
         }
-        self.may_memo[gt as usize] = (2, m);
-        m
+        self.may_memo[gt as usize] = (2, id);
+        id
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
@@ -641,7 +710,8 @@ impl<'a, 'o> Search<'a, 'o> {
             let n = &self.arena[next as usize];
             (n.len, n.hash, n.may)
         };
-        let may = may | self.may_achieve(task);
+        let mine = self.may_achieve(task);
+        let may = self.masks.union(mine, may);
         let hash = mix64(h.rotate_left(7) ^ mix64(task as u64 ^ self.salt));
         self.arena.push(Cell {
             task,
