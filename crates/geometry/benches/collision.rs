@@ -156,6 +156,39 @@ fn bench(c: &mut Criterion) {
                 .count()
         })
     });
+    // A cluttered scene: the library plus 300 small boxes around the robot (BVH broad phase).
+    let mut clutter = library();
+    let mut crng = fastrand::Rng::with_seed(3);
+    for i in 0..300 {
+        let (x, y, z) = (
+            crng.f32() * 6.0 - 3.0,
+            crng.f32() * 6.0 - 3.0,
+            crng.f32() * 2.0,
+        );
+        if x.abs() < 1.2 && y.abs() < 1.2 {
+            continue; // keep the robot's reach clear enough to have free configurations
+        }
+        clutter.push(boxed(
+            &format!("clutter-{i}"),
+            [x, y, z],
+            [x + 0.05, y + 0.2, z + 0.25],
+        ));
+    }
+    let n_clutter = clutter.len();
+    let clutter_checker = CollisionChecker::new(
+        checker.self_collision_model().clone(),
+        Arc::new(StaticObstacles::new(clutter)),
+        Pose::IDENTITY,
+    );
+    eprintln!("cluttered scene: {n_clutter} obstacles");
+    g.bench_function("is_config_free/cluttered_random_1000", |b| {
+        b.iter(|| {
+            random
+                .iter()
+                .filter(|q| clutter_checker.is_config_free(black_box(q)))
+                .count()
+        })
+    });
     g.bench_function("forward_kinematics_1000", |b| {
         let mut poses = Vec::new();
         b.iter(|| {
