@@ -583,6 +583,10 @@ impl Search {
             }
         }
         let c = self.c.clone();
+        let maps = self
+            .cfg
+            .mightability
+            .then(|| geometry::mightability::cached(&self.world, &Default::default()));
         let mut pts = Vec::new();
         for p in raw {
             if self.tried_points.contains(&key(p)) {
@@ -593,6 +597,25 @@ impl Search {
             } else {
                 p + Vector::Z * obj_h
             };
+            if let (Some(m), Some(h)) = (&maps, self.human) {
+                // The maps' cells: the same tests as below, precomputed for the world state.
+                let at_most = |l: Option<u8>, k: u8| l.is_some_and(|l| l <= k);
+                let robot = self.setup.agent;
+                if !at_most(m.reach_level(robot, centre), c.robot_effort)
+                    || c.reach_within
+                        .is_some_and(|k| !at_most(m.reach_level(h, centre), k.min(level)))
+                    || c.unreachable_within
+                        .is_some_and(|k| at_most(m.reach_level(h, centre), k))
+                    || (c.min_visibility.is_some_and(|v| v > 0.0)
+                        && !at_most(m.vis_level(h, centre), level))
+                    || (c.max_visibility.is_some_and(|v| v < 0.05)
+                        && at_most(m.vis_level(h, centre), c.max_effort))
+                {
+                    continue;
+                }
+                pts.push(p);
+                continue;
+            }
             if !rshoulders.iter().any(|s| (*s - centre).length() <= rreach) {
                 continue;
             }

@@ -299,3 +299,26 @@ fn the_same_seed_gives_the_same_solution() {
     sb.stats.time_s = 0.0;
     assert_eq!(sa, sb);
 }
+
+#[test]
+fn candidate_points_from_the_mightability_maps() {
+    let world = library();
+    let planner = Planner::with_config(gtp::planner::PlannerConfig {
+        mightability: true,
+        ..Default::default()
+    });
+    let book = world.object_id("grey-book").unwrap();
+    let member = world.agent_id("member").unwrap();
+    for task in ["make-accessible", "put-away"] {
+        let s = first(&planner, &world, task, &["grey-book", "member"]);
+        recheck(&planner, &world, &s);
+        let (v0, v1) = visibility(&planner, &s.world, member, book);
+        if task == "put-away" {
+            assert!(v0 <= 0.0 && v1 <= 0.0, "{task}: visibility {v0} / {v1}");
+            assert!(reach_within(&s.world, member, book, 1).is_none());
+        } else {
+            assert!(v0.max(v1) >= 0.5, "{task}: visibility {v0} / {v1}");
+            assert!(reach_within(&s.world, member, book, 1).is_some());
+        }
+    }
+}

@@ -56,6 +56,10 @@ pub struct Args {
     /// Re-check every trajectory at 4x finer resolution before reporting it.
     #[arg(long)]
     pub verify: bool,
+    /// Filter candidate points with the scene's mightability maps (computed first, ~0.6 s)
+    /// instead of testing each point directly.
+    #[arg(long)]
+    pub mightability: bool,
 }
 
 #[derive(Serialize)]
@@ -84,7 +88,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         };
         options = options.with(k.trim(), v.trim());
     }
-    let planner = Planner::new();
+    let planner = Planner::with_config(gtp::planner::PlannerConfig {
+        mightability: args.mightability,
+        ..Default::default()
+    });
     let names: Vec<&str> = args.args.iter().map(String::as_str).collect();
     let mut stream = match planner.run(&world, &args.task, &names, &options) {
         Ok(s) => s,
