@@ -769,13 +769,27 @@ impl CollisionChecker {
     }
 
     /// The same checker with an object held (replacing any other).
+    ///
+    /// # Panics
+    /// If `held` was made for another agent model.
     pub fn with_held_object(mut self, held: HeldObject) -> CollisionChecker {
-        self.held = Some(held);
+        self.set_held_object(Some(held));
         self
     }
 
     /// Sets or clears the held object.
+    ///
+    /// # Panics
+    /// If `held` was made for another agent model.
     pub fn set_held_object(&mut self, held: Option<HeldObject>) {
+        if let Some(h) = &held {
+            assert!(
+                h.touching.len() == self.agent.model.links().len(),
+                "held object '{}' was made for another agent model than '{}'",
+                h.name,
+                self.agent.model.name()
+            );
+        }
         self.held = held;
     }
 

@@ -130,6 +130,31 @@ pub fn solve_ik(
             "target or base pose is not finite".into(),
         ));
     }
+    // The chain must be a path of this model, its dofs those of its joints.
+    let consistent = chain.root_link < model.links().len()
+        && chain.tip_link < model.links().len()
+        && chain.joints.iter().all(|&j| j < model.joints().len())
+        && {
+            let mut at = chain.root_link;
+            let mut dofs = Vec::new();
+            for &j in &chain.joints {
+                let joint = &model.joints()[j];
+                if joint.parent != at || joint.mimic.is_some() {
+                    at = usize::MAX;
+                    break;
+                }
+                dofs.extend(joint.dof);
+                at = joint.child;
+            }
+            at == chain.tip_link && dofs == chain.dofs
+        };
+    if !consistent {
+        return Err(IkError::BadInput(format!(
+            "chain '{}' does not belong to model '{}'",
+            chain.name,
+            model.name()
+        )));
+    }
     let root = model.link_pose_by_id(base, q, chain.root_link);
     // Target in the chain root's frame, with a normalised rotation.
     let mut goal = root.inv_mul(&target);

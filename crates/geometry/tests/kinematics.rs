@@ -306,6 +306,26 @@ mod ik {
     }
 
     #[test]
+    fn chain_of_another_model_is_rejected() {
+        let pr2 = model("pr2.urdf");
+        let human = model("human.urdf");
+        let chain = pr2.chain("right_arm").unwrap();
+        let q = human.default_configuration();
+        let mut rng = fastrand::Rng::with_seed(8);
+        let e = solve_ik(
+            &human,
+            &chain,
+            Pose::IDENTITY,
+            q.as_slice(),
+            Pose::IDENTITY,
+            &IkOptions::default(),
+            &mut rng,
+        )
+        .unwrap_err();
+        assert!(matches!(e, IkError::BadInput(_)), "{e}");
+    }
+
+    #[test]
     fn position_only_target() {
         let m = model("pr2.urdf");
         let chain = m.chain("right_arm").unwrap();
