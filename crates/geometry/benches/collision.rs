@@ -252,6 +252,55 @@ fn bench(c: &mut Criterion) {
                 .count()
         })
     });
+    // Failures: within the arm's reach distance but behind the robot with the tool pointing
+    // forward (what a planner's rejected candidates cost).
+    let behind: Vec<Pose> = (0..50)
+        .map(|i| {
+            let (a, b) = ((i % 5) as f32 / 4.0, (i / 5) as f32 / 9.0);
+            Pose::from_translation(Vector::new(-0.7 + 0.2 * a, -0.3 + 0.6 * b, 0.6 + 0.4 * a))
+        })
+        .collect();
+    let mut rng = fastrand::Rng::with_seed(2);
+    let solved_behind = behind
+        .iter()
+        .filter(|t| {
+            solve_ik(
+                &model,
+                &chain,
+                Pose::IDENTITY,
+                &rest,
+                **t,
+                &options,
+                &mut rng,
+            )
+            .is_ok()
+        })
+        .count();
+    eprintln!(
+        "ik: {solved_behind} of {} poses behind the robot solved",
+        behind.len()
+    );
+    g.throughput(Throughput::Elements(behind.len() as u64));
+    g.bench_function("right_arm_behind_50", |b| {
+        let mut rng = fastrand::Rng::with_seed(2);
+        b.iter(|| {
+            behind
+                .iter()
+                .filter(|t| {
+                    solve_ik(
+                        &model,
+                        &chain,
+                        Pose::IDENTITY,
+                        &rest,
+                        **t,
+                        &options,
+                        &mut rng,
+                    )
+                    .is_ok()
+                })
+                .count()
+        })
+    });
     g.finish();
 }
 
