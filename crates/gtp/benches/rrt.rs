@@ -45,17 +45,26 @@ fn bench_rrt(c: &mut Criterion) {
     let base = world.agent_state(setup.agent).base;
     let q0 = world.agent_state(setup.agent).q.clone();
     let params = planner.config().rrt.clone();
+    let st = world.agent_state(setup.agent);
+    let (centre, radius) = setup.workspace(st.base, &st.q, 0.3);
+    let near = |o: geometry::collision::StaticObstacles| robot::near(&o, centre, radius);
     let mut g = c.benchmark_group("rrt_connect");
     for t in &solution.summary.trajectories {
         let (obstacles, held) = match t.phase {
-            Phase::Approach => (robot::obstacles(&world, setup.agent, &[]), None),
+            Phase::Approach => (near(robot::obstacles(&world, setup.agent, &[])), None),
             Phase::Transfer => {
                 let h = t.held.as_ref().unwrap();
                 let held =
                     robot::held_object(&world, &setup, arm, book, h.object_in_tool.into()).unwrap();
-                (robot::obstacles(&world, setup.agent, &[book]), Some(held))
+                (
+                    near(robot::obstacles(&world, setup.agent, &[book])),
+                    Some(held),
+                )
             }
-            Phase::Return => (robot::obstacles(&solution.world, setup.agent, &[]), None),
+            Phase::Return => (
+                near(robot::obstacles(&solution.world, setup.agent, &[])),
+                None,
+            ),
             _ => continue,
         };
         let mut template = q0.clone();

@@ -67,6 +67,39 @@ pub struct RobotSetup {
 }
 
 impl RobotSetup {
+    /// A sphere holding everything the arms can touch in the robot's current posture (torso
+    /// and base as in `q`), with `margin` for a held object: `(centre, radius)`.
+    pub fn workspace(&self, base: Pose, q: &[f32], margin: f32) -> (Vector, f32) {
+        let shoulders: Vec<Vector> = self
+            .arms
+            .iter()
+            .map(|a| {
+                let j = a
+                    .chain
+                    .joints
+                    .iter()
+                    .copied()
+                    .find(|&j| self.model.joints()[j].is_movable())
+                    .unwrap_or(a.chain.joints[0]);
+                let parent = self.model.joints()[j].parent;
+                (self.model.link_pose_by_id(base, q, parent) * self.model.joints()[j].origin)
+                    .translation
+            })
+            .collect();
+        let centre =
+            shoulders.iter().fold(Vector::ZERO, |a, b| a + *b) / shoulders.len().max(1) as f32;
+        let reach = self
+            .arms
+            .iter()
+            .map(|a| a.wrist_reach + a.wrist_to_tool + 0.05)
+            .fold(0.0f32, f32::max);
+        let spread = shoulders
+            .iter()
+            .map(|s| (*s - centre).length())
+            .fold(0.0f32, f32::max);
+        (centre, spread + reach + margin)
+    }
+
     /// The first robot agent of the world, with the arms named `right_arm` and `left_arm`.
     pub fn new(world: &World) -> Result<RobotSetup, String> {
         let agent = world
@@ -183,6 +216,23 @@ pub fn obstacles(world: &World, robot: AgentId, skip: &[ObjectId]) -> StaticObst
         list.extend(agent_obstacles(&info.model, st.base, &st.q, info.name()));
     }
     StaticObstacles::new(list)
+}
+
+/// The obstacles within `radius` of `centre` (by their bounding boxes): for arm motions, the
+/// arm's workspace around the shoulders; nothing farther can touch the arm or what it holds.
+pub fn near(obstacles: &StaticObstacles, centre: Vector, radius: f32) -> StaticObstacles {
+    let keep: Vec<Obstacle> = obstacles
+        .obstacles()
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| {
+            let b = obstacles.aabb(*i);
+            let closest = centre.clamp(b.mins, b.maxs);
+            (closest - centre).length() <= radius
+        })
+        .map(|(_, o)| o.clone())
+        .collect();
+    StaticObstacles::new(keep)
 }
 
 /// The arm's values within a full configuration.

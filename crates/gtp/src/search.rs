@@ -91,6 +91,11 @@ pub(crate) struct Search {
     q0_full: Vec<f32>,
     obstacles_all: Arc<StaticObstacles>,
     obstacles_wo: Arc<StaticObstacles>,
+    /// Every obstacle (the two above keep only the arms' workspace).
+    full_all: Arc<StaticObstacles>,
+    full_wo: Arc<StaticObstacles>,
+    /// The arms' workspace sphere `(centre, radius)`.
+    workspace: (Vector, f32),
     /// Obstacles the object touches where it rests (left unchecked at the start of the lift).
     resting_on: Vec<String>,
     faces: Vec<RestingFace>,
@@ -136,8 +141,18 @@ impl Search {
         let robot = setup.agent;
         let object = task.object;
         let skip: Vec<ObjectId> = object.into_iter().collect();
-        let obstacles_all = Arc::new(robot::obstacles(&world, robot, &[]));
-        let obstacles_wo = Arc::new(robot::obstacles(&world, robot, &skip));
+        // Everything, for the base's motions and lines of sight; the arms' workspace only for
+        // the arms' motions and the objects they move (far obstacles cost checks for nothing).
+        let full_all = robot::obstacles(&world, robot, &[]);
+        let full_wo = Arc::new(robot::obstacles(&world, robot, &skip));
+        let st = world.agent_state(robot);
+        let margin = object
+            .map(|o| world.object(o).local_aabb.half_extents().length() * 2.0)
+            .unwrap_or(0.0);
+        let (centre, radius) = setup.workspace(st.base, &st.q, margin);
+        let obstacles_all = Arc::new(robot::near(&full_all, centre, radius));
+        let obstacles_wo = Arc::new(robot::near(&full_wo, centre, radius));
+        let full_all = Arc::new(full_all);
         let q0_full = world.agent_state(robot).q.clone();
         let mut faces = Vec::new();
         let mut choices = Vec::new();
@@ -240,6 +255,9 @@ impl Search {
             q0_full,
             obstacles_all,
             obstacles_wo,
+            full_all,
+            full_wo,
+            workspace: (centre, radius),
             resting_on,
             faces,
             choices,
@@ -499,7 +517,7 @@ impl Search {
         }
         let ray = Ray::new(from, dir / len);
         let skip_human = self.human.map(|h| self.world.agent(h).name().to_string());
-        !self.obstacles_wo.obstacles().iter().any(|o| {
+        !self.full_wo.obstacles().iter().any(|o| {
             if let Some(n) = &skip_human
                 && o.name.starts_with(&format!("{n}/"))
             {
@@ -1341,7 +1359,11 @@ impl Search {
         };
         let q_ret = retreat.waypoints.last().unwrap().clone();
         // Return the arm to where it started, the object now an obstacle where it was placed.
-        let obstacles_after = Arc::new(robot::obstacles(&after, robot, &[]));
+        let obstacles_after = Arc::new(robot::near(
+            &robot::obstacles(&after, robot, &[]),
+            self.workspace.0,
+            self.workspace.1,
+        ));
         let open_after = self
             .motion(&setup, ch.arm, obstacles_after, None, ch.grasp.opening)
             .ok()?;
@@ -1626,7 +1648,7 @@ impl Search {
         }
         let rreach = self.world.agent(robot).reach;
         let q = self.q0_full.clone();
-        let obstacles = self.obstacles_all.clone();
+        let obstacles = self.full_all.clone();
         let mut checker = geometry::collision::CollisionChecker::new(
             self.setup.self_model.clone(),
             obstacles,
