@@ -235,6 +235,24 @@ pub fn near(obstacles: &StaticObstacles, centre: Vector, radius: f32) -> StaticO
     StaticObstacles::new(keep)
 }
 
+/// World position of `arm`'s first movable joint in configuration `q`.
+pub fn shoulder(setup: &RobotSetup, arm: &Arm, base: Pose, q: &[f32]) -> Vector {
+    let model = &setup.model;
+    match arm
+        .chain
+        .joints
+        .iter()
+        .copied()
+        .find(|&j| model.joints()[j].is_movable())
+    {
+        Some(j) => {
+            let parent = model.joints()[j].parent;
+            (model.link_pose_by_id(base, q, parent) * model.joints()[j].origin).translation
+        }
+        None => base.translation,
+    }
+}
+
 /// The arm's values within a full configuration.
 pub fn arm_values(arm: &Arm, q: &[f32]) -> Vec<f32> {
     arm.chain.dofs.iter().map(|&k| q[k]).collect()

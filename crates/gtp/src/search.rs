@@ -94,6 +94,8 @@ pub(crate) struct Search {
     /// Every obstacle (the two above keep only the arms' workspace).
     full_all: Arc<StaticObstacles>,
     full_wo: Arc<StaticObstacles>,
+    /// World position of each arm's first movable joint.
+    arm_shoulders: Vec<Vector>,
     /// The arms' workspace sphere `(centre, radius)`.
     workspace: (Vector, f32),
     /// Obstacles the object touches where it rests (left unchecked at the start of the lift).
@@ -151,6 +153,11 @@ impl Search {
             .unwrap_or(0.0);
         let (centre, radius) = setup.workspace(st.base, &st.q, margin);
         let obstacles_all = Arc::new(robot::near(&full_all, centre, radius));
+        let arm_shoulders: Vec<Vector> = setup
+            .arms
+            .iter()
+            .map(|a| robot::shoulder(&setup, a, st.base, &st.q))
+            .collect();
         let obstacles_wo = Arc::new(robot::near(&full_wo, centre, radius));
         let full_all = Arc::new(full_all);
         let q0_full = world.agent_state(robot).q.clone();
@@ -258,6 +265,7 @@ impl Search {
             full_all,
             full_wo,
             workspace: (centre, radius),
+            arm_shoulders,
             resting_on,
             faces,
             choices,
@@ -394,6 +402,11 @@ impl Search {
                 self.ci = 0;
                 self.oi = 0;
                 self.choice_ready = false;
+                if !self.point_has_placement() {
+                    self.pi += 1;
+                    self.orientations = None;
+                    continue;
+                }
             }
             if self.ci >= self.choices.len() {
                 self.pi += 1;
@@ -401,7 +414,11 @@ impl Search {
                 continue;
             }
             if !self.choice_ready {
-                if self.failed_choices.contains(&self.ci) || !self.pick_feasible(self.ci) {
+                let p = self.points.as_ref().unwrap()[self.pi];
+                if self.failed_choices.contains(&self.ci)
+                    || !self.arm_may_reach_point(self.choices[self.ci].arm, p)
+                    || !self.pick_feasible(self.ci)
+                {
                     self.ci += 1;
                     continue;
                 }
@@ -687,9 +704,15 @@ impl Search {
                     mid
                 }
             }
-            _ => {
-                rshoulders.iter().fold(Vector::ZERO, |a, b| a + *b) / rshoulders.len().max(1) as f32
-            }
+            // Elsewhere, near where the object is: the least carrying, and likely within reach
+            // of the arm that holds or will pick it.
+            _ => match self.object {
+                Some(o) => self.world.object_pose(o).translation,
+                None => {
+                    rshoulders.iter().fold(Vector::ZERO, |a, b| a + *b)
+                        / rshoulders.len().max(1) as f32
+                }
+            },
         };
         pts.sort_by(|a, b| {
             (*a - anchor)
@@ -830,6 +853,21 @@ impl Search {
             self.world.agent_state(setup.agent).base,
             template,
         ))
+    }
+
+    /// Whether `arm` may reach an object at point `p` at all (its tool within the arm's reach
+    /// from the shoulder, with the object's size as slack): a cheap test before any grasp.
+    fn arm_may_reach_point(&self, arm: usize, p: Vector) -> bool {
+        if self.task.kind == TaskKind::Pick {
+            return true;
+        }
+        let a = &self.setup.arms[arm];
+        let slack = self
+            .object
+            .map(|o| self.world.object(o).local_aabb.half_extents().length())
+            .unwrap_or(0.0);
+        let shoulder = self.arm_shoulders[arm];
+        (p - shoulder).length() <= a.wrist_reach + a.wrist_to_tool + slack + 0.05
     }
 
     /// Whether choice `ci` can be picked up (computed once and remembered).
@@ -1122,7 +1160,16 @@ impl Search {
             return 0.0;
         };
         self.stats.visibility_checks += 1;
-        measure_visibility(world, h, o, level, self.cfg.visibility_resolution)
+        let full = self.cfg.visibility_resolution;
+        if self.c.max_visibility.is_some() && full > 8 {
+            // Hiding: one ray reaching the object unblocked already shows it, so a coarse
+            // grid proves most failures at a sixteenth of the cost.
+            let coarse = measure_visibility(world, h, o, level, 8);
+            if coarse > self.c.max_visibility.unwrap_or(0.0) {
+                return coarse;
+            }
+        }
+        measure_visibility(world, h, o, level, full)
     }
 
     fn try_tuple(
@@ -1421,6 +1468,44 @@ impl Search {
             level,
             trajectories,
         ))
+    }
+
+    /// For placing tasks: whether some orientation at the current point meets the human-related
+    /// constraints (reach, visibility). Those do not depend on the grasp (the arm returns to
+    /// where it started), so they are measured once per orientation, before any grasp is tried
+    /// at the point, stopping at the first orientation that passes; a point where none passes
+    /// costs no grasp. The verdicts are remembered for the tuples that follow.
+    fn point_has_placement(&mut self) -> bool {
+        let (Some(o), Some(_)) = (self.object, self.human) else {
+            return true;
+        };
+        if !self.task.kind.places() {
+            return true;
+        }
+        let level = self.levels[self.li];
+        let orients = self.orientations.clone().unwrap_or_default();
+        for (oidx, orient) in orients.iter().enumerate() {
+            let key = (self.li, self.pi, oidx);
+            let v = match self.verdicts.get(&key) {
+                Some(v) => *v,
+                None => {
+                    let mut after = self.world.clone();
+                    after.set_agent_config(
+                        self.setup.agent,
+                        after.agent_state(self.setup.agent).base,
+                        &self.q0_full,
+                    );
+                    after.set_object_pose(o, orient.pose);
+                    let v = self.placement_verdict(&after, level);
+                    self.verdicts.insert(key, v);
+                    v
+                }
+            };
+            if v.is_some() {
+                return true;
+            }
+        }
+        false
     }
 
     /// The human-related constraints on the world after a tuple: reach, then pixel visibility
