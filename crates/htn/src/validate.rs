@@ -15,6 +15,7 @@
 //! - the goal, if any, holds at the end.
 
 use std::collections::{HashMap, HashSet};
+use std::hash::BuildHasherDefault;
 
 use crate::model::{
     ArithOp, CompareOp, Domain, Effect, Formula, Method, NumExpr, NumericEffectOp, OBJECT_TYPE,
@@ -22,6 +23,10 @@ use crate::model::{
 };
 use crate::oracle::GroundAtom;
 use crate::plan::Plan;
+use crate::state::FxHasher;
+
+type FastSet<K> = HashSet<K, BuildHasherDefault<FxHasher>>;
+type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// The first fault found in a plan.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -38,13 +43,28 @@ struct World<'a> {
     objects_of: HashMap<String, Vec<String>>,
 }
 
+/// The state: facts as `[predicate, args..]` keys, indexed by predicate; fluent values.
 #[derive(Clone, Default)]
 struct St {
-    facts: HashSet<Key>,
-    values: HashMap<Key, f64>,
+    facts: FastMap<String, FastSet<Key>>,
+    values: FastMap<Key, f64>,
 }
 
-type Env = HashMap<String, String>;
+impl St {
+    fn contains(&self, k: &Key) -> bool {
+        self.facts.get(&k[0]).is_some_and(|s| s.contains(k))
+    }
+    fn insert(&mut self, k: Key) {
+        self.facts.entry(k[0].clone()).or_default().insert(k);
+    }
+    fn remove(&mut self, k: &Key) {
+        if let Some(s) = self.facts.get_mut(&k[0]) {
+            s.remove(k);
+        }
+    }
+}
+
+type Env = FastMap<String, String>;
 
 /// Checks `plan` for `problem` of `domain`. `shared_init` are the initial facts of the shared
 /// predicates (from the geometric back end; empty for plain HDDL).
@@ -82,45 +102,23 @@ pub fn validate(
     let mut leaves: Vec<u32> = Vec::new();
     // (decomposition index, leaf position) in depth-first order.
     let mut dec_pos: Vec<(usize, usize)> = Vec::new();
-    fn walk(
-        id: u32,
-        plan: &Plan,
-        action_at: &HashMap<u32, usize>,
-        dec_of: &HashMap<u32, usize>,
-        used: &mut HashSet<u32>,
-        leaves: &mut Vec<u32>,
-        dec_pos: &mut Vec<(usize, usize)>,
-    ) -> Result<(), Fault> {
+    // Depth first, left to right, with an explicit stack (trees can be very deep).
+    let mut todo: Vec<u32> = plan.root.iter().rev().copied().collect();
+    while let Some(id) = todo.pop() {
         if !used.insert(id) {
-            return Err(Fault(format!(
-                "id {id} occurs twice in the decomposition tree"
-            )));
+            return fault(format!("id {id} occurs twice in the decomposition tree"));
         }
         if action_at.contains_key(&id) {
             leaves.push(id);
-            return Ok(());
+            continue;
         }
         let Some(&d) = dec_of.get(&id) else {
-            return Err(Fault(format!(
+            return fault(format!(
                 "id {id} is neither an action nor a decomposed task"
-            )));
+            ));
         };
         dec_pos.push((d, leaves.len()));
-        for &c in &plan.decompositions[d].subtasks {
-            walk(c, plan, action_at, dec_of, used, leaves, dec_pos)?;
-        }
-        Ok(())
-    }
-    for &r in &plan.root {
-        walk(
-            r,
-            plan,
-            &action_at,
-            &dec_of,
-            &mut used,
-            &mut leaves,
-            &mut dec_pos,
-        )?;
+        todo.extend(plan.decompositions[d].subtasks.iter().rev());
     }
     for a in &plan.actions {
         if !used.contains(&a.id) {
@@ -167,7 +165,7 @@ pub fn validate(
             net.len()
         ));
     }
-    let mut root_env: Env = Env::new();
+    let mut root_env: Env = Env::default();
     for (k, (st, &id)) in net.iter().zip(&plan.root).enumerate() {
         let (name, args) = name_args(id);
         if st.name != name || !unify(&w, &mut root_env, &st.args, args, &problem.htn.params) {
@@ -182,7 +180,7 @@ pub fn validate(
     }
 
     // Decomposition lines against methods; remember each one's binding.
-    let mut bindings: Vec<Env> = vec![Env::new(); plan.decompositions.len()];
+    let mut bindings: Vec<Env> = vec![Env::default(); plan.decompositions.len()];
     for (i, d) in plan.decompositions.iter().enumerate() {
         let Some(task) = domain.tasks.iter().find(|t| t.name == d.task) else {
             return fault(format!(
@@ -219,7 +217,7 @@ pub fn validate(
                 d.id, m.name, m.task, d.task
             ));
         }
-        let mut env = Env::new();
+        let mut env = Env::default();
         if !unify(&w, &mut env, &m.task_args, &d.args, &m.params) {
             return fault(format!(
                 "task {} ({} {}): the arguments do not match method `{}`'s task ({} {})",
@@ -260,10 +258,10 @@ pub fn validate(
     // Execute, checking method preconditions at their places.
     let mut st = St::default();
     for f in &problem.init {
-        st.facts.insert(key(&f.predicate, &f.args));
+        st.insert(key(&f.predicate, &f.args));
     }
     for a in shared_init {
-        st.facts.insert(key(&a.predicate, &a.args));
+        st.insert(key(&a.predicate, &a.args));
     }
     for v in &problem.init_values {
         st.values.insert(key(&v.function, &v.args), v.value);
@@ -307,7 +305,7 @@ pub fn validate(
             ))
         })?;
     }
-    let mut env = Env::new();
+    let mut env = Env::default();
     if !w.holds(&st, &problem.goal, &mut env) {
         return fault("the goal does not hold at the end of the plan".to_string());
     }
@@ -454,7 +452,7 @@ impl<'a> World<'a> {
             Formula::True => true,
             Formula::Atom(a) => self
                 .ground(&a.predicate, &a.args, env)
-                .is_some_and(|k| st.facts.contains(&k)),
+                .is_some_and(|k| st.contains(&k)),
             Formula::Equal(a, b, _) => match (self.term(a, env), self.term(b, env)) {
                 (Some(x), Some(y)) => x == y,
                 _ => false,
@@ -508,6 +506,85 @@ impl<'a> World<'a> {
         found
     }
 
+    /// Whether some binding of `vars` makes every formula of `body` hold. Variables are bound
+    /// through the facts of a positive atom that mentions them when there is one (the same
+    /// answer as trying every object of their types, much faster), else by their types.
+    fn quantify_all(&self, st: &St, vars: &[TypedName], body: &[&Formula], env: &mut Env) -> bool {
+        let mut conj: Vec<&Formula> = Vec::new();
+        fn flatten<'f>(f: &'f Formula, out: &mut Vec<&'f Formula>) {
+            match f {
+                Formula::And(xs) => xs.iter().for_each(|x| flatten(x, out)),
+                Formula::True => {}
+                f => out.push(f),
+            }
+        }
+        body.iter().for_each(|f| flatten(f, &mut conj));
+        self.bind(st, vars, &conj, env)
+    }
+
+    fn bind(&self, st: &St, vars: &[TypedName], conj: &[&Formula], env: &mut Env) -> bool {
+        let unbound: Vec<&TypedName> = vars.iter().filter(|v| !env.contains_key(&v.name)).collect();
+        if unbound.is_empty() {
+            return conj.iter().all(|f| self.holds(st, f, env));
+        }
+        let is_unbound = |t: &Term, env: &Env| matches!(t, Term::Var(v) if !env.contains_key(v) && unbound.iter().any(|u| &u.name == v));
+        // A positive atom over some unbound variable binds them from the facts.
+        let atom = conj.iter().find_map(|f| match f {
+            Formula::Atom(a) if a.args.iter().any(|t| is_unbound(t, env)) => Some(a),
+            _ => None,
+        });
+        if let Some(a) = atom {
+            let Some(facts) = st.facts.get(&a.predicate) else {
+                return false;
+            };
+            for fact in facts {
+                if fact.len() != a.args.len() + 1 {
+                    continue;
+                }
+                let mut newly: Vec<String> = Vec::new();
+                let mut ok = true;
+                for (t, val) in a.args.iter().zip(&fact[1..]) {
+                    match t {
+                        Term::Const(c) => ok = c == val,
+                        Term::Var(v) => match env.get(v) {
+                            Some(b) => ok = b == val,
+                            None => {
+                                let ty =
+                                    unbound.iter().find(|u| &u.name == v).map(|u| u.ty.as_str());
+                                ok = ty.is_some_and(|ty| self.is_of(val, ty));
+                                if ok {
+                                    env.insert(v.clone(), val.clone());
+                                    newly.push(v.clone());
+                                }
+                            }
+                        },
+                    }
+                    if !ok {
+                        break;
+                    }
+                }
+                let found = ok && self.bind(st, vars, conj, env);
+                for v in newly {
+                    env.remove(&v);
+                }
+                if found {
+                    return true;
+                }
+            }
+            return false;
+        }
+        let v = unbound[0];
+        for o in self.objects(&v.ty) {
+            env.insert(v.name.clone(), o.clone());
+            if self.bind(st, vars, conj, env) {
+                env.remove(&v.name);
+                return true;
+            }
+        }
+        env.remove(&v.name);
+        false
+    }
+
     /// Whether some binding of `vars` makes `body` false.
     fn quantify_not(&self, st: &St, vars: &[TypedName], body: &Formula, env: &mut Env) -> bool {
         self.quantify(st, vars, body, env, false)
@@ -520,9 +597,8 @@ impl<'a> World<'a> {
             .filter(|p| !env.contains_key(&p.name))
             .cloned()
             .collect();
-        let body = Formula::And(vec![m.precondition.clone(), m.constraints.clone()]);
         let mut env = env.clone();
-        self.quantify(st, &free, &body, &mut env, true)
+        self.quantify_all(st, &free, &[&m.precondition, &m.constraints], &mut env)
     }
 
     fn execute(&self, st: &mut St, a: &crate::plan::PlanAction) -> Result<(), String> {
@@ -536,7 +612,7 @@ impl<'a> World<'a> {
                 act.params.len()
             ));
         }
-        let mut env = Env::new();
+        let mut env = Env::default();
         for (p, x) in act.params.iter().zip(&a.args) {
             if !self.is_of(x, &p.ty) {
                 return Err(format!("`{x}` is not an object of type `{}`", p.ty));
@@ -567,17 +643,17 @@ impl<'a> World<'a> {
             st.values.insert(k, v);
         }
         for k in &dels {
-            st.facts.remove(k);
+            st.remove(k);
         }
         for k in adds {
-            st.facts.insert(k);
+            st.insert(k);
         }
         if let Some(g) = &a.geometric {
             for x in &g.delete {
-                st.facts.remove(&key(&x.predicate, &x.args));
+                st.remove(&key(&x.predicate, &x.args));
             }
             for x in &g.add {
-                st.facts.insert(key(&x.predicate, &x.args));
+                st.insert(key(&x.predicate, &x.args));
             }
         }
         Ok(())
