@@ -417,6 +417,7 @@ impl Search {
                 let p = self.points.as_ref().unwrap()[self.pi];
                 if self.failed_choices.contains(&self.ci)
                     || !self.arm_may_reach_point(self.choices[self.ci].arm, p)
+                    || !self.choice_fits_point(self.ci)
                     || !self.pick_feasible(self.ci)
                 {
                     self.ci += 1;
@@ -868,6 +869,35 @@ impl Search {
             .unwrap_or(0.0);
         let shoulder = self.arm_shoulders[arm];
         (p - shoulder).length() <= a.wrist_reach + a.wrist_to_tool + slack + 0.05
+    }
+
+    /// Whether choice `ci` could place the object in some orientation at the current point:
+    /// an orientation not already failed, whose tool pose is within the arm's reach and whose
+    /// gripper boxes are free. Cheap (box tests), so that a grasp is not picked up for a point
+    /// where it cannot be used.
+    fn choice_fits_point(&self, ci: usize) -> bool {
+        if self.task.kind == TaskKind::Pick {
+            return true;
+        }
+        let ch = self.choices[ci];
+        let arm = &self.setup.arms[ch.arm];
+        let shoulder = self.arm_shoulders[ch.arm];
+        let orients = self.orientations.as_deref().unwrap_or(&[]);
+        let placing = self.task.kind.places();
+        for (oidx, orient) in orients.iter().enumerate() {
+            if placing && self.verdicts.get(&(self.li, self.pi, oidx)) == Some(&None) {
+                continue;
+            }
+            let tool = orient.pose * ch.tool_in_object;
+            if arm.may_reach(shoulder, &tool)
+                && self
+                    .gripper_free(&tool, ch.grasp.width, &self.obstacles_wo)
+                    .is_none()
+            {
+                return true;
+            }
+        }
+        false
     }
 
     /// Whether choice `ci` can be picked up (computed once and remembered).
