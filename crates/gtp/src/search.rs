@@ -3,7 +3,7 @@
 //! across effort levels; the chosen tuple confirmed by collision-free trajectories.
 //!
 //! The search is a resumable cursor over (level, point, grasp, orientation): each call of
-//! [`Search::next_solution`] continues where the previous solution was found, so successive
+//! `Search::next_solution` continues where the previous solution was found, so successive
 //! solutions differ in at least one of point, grasp or orientation.
 
 use std::collections::{HashMap, HashSet};
