@@ -131,10 +131,10 @@ impl Default for RrtParams {
     fn default() -> Self {
         RrtParams {
             resolution: 0.1,
-            max_step: 0.6,
+            max_step: 1.0,
             max_nodes: 5000,
             time_limit: Duration::from_millis(500),
-            shortcut_iterations: 30,
+            shortcut_iterations: 10,
             certify_factor: 4,
         }
     }
