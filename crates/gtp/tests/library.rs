@@ -322,3 +322,46 @@ fn candidate_points_from_the_mightability_maps() {
         }
     }
 }
+
+#[test]
+fn the_time_limit_stops_a_call_and_says_so() {
+    let world = library();
+    let planner = Planner::new();
+    let mut stream = planner
+        .run(
+            &world,
+            "put-away",
+            &["pos-machine", "member"],
+            &CallOptions::seeded(1).with("time-limit", "0.000001"),
+        )
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert!(f.limit, "{f}");
+    assert_eq!(f.constraint, "time-limit");
+    assert!(!stream.stats().success);
+}
+
+#[test]
+fn tasks_chain_from_the_world_a_solution_leaves() {
+    // Show the book (held in the air), then make it accessible from there: the grasp is kept.
+    let world = library();
+    let planner = Planner::new();
+    let book = world.object_id("grey-book").unwrap();
+    let member = world.agent_id("member").unwrap();
+    let shown = first(&planner, &world, "show", &["grey-book", "member"]);
+    let s = first(
+        &planner,
+        &shown.world,
+        "make-accessible",
+        &["grey-book", "member"],
+    );
+    recheck(&planner, &shown.world, &s);
+    assert!(
+        s.summary.grasp.as_ref().unwrap().id.is_none(),
+        "the held grasp is reused"
+    );
+    let (v0, v1) = visibility(&planner, &s.world, member, book);
+    assert!(v0.max(v1) >= 0.5);
+    assert!(s.world.attachment(book).is_none());
+}
