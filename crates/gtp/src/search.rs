@@ -355,8 +355,8 @@ impl Search {
                 self.failure = Some(Failure {
                     constraint: "time-limit".into(),
                     message: format!(
-                        "time limit of {:.1} s reached ({})",
-                        self.c.time_limit.as_secs_f32(),
+                        "time limit of {:?} reached ({})",
+                        self.c.time_limit,
                         self.explain().message
                     ),
                     limit: true,
@@ -1789,10 +1789,7 @@ impl Search {
             if self.out_of_time(began) {
                 self.failure = Some(Failure {
                     constraint: "time-limit".into(),
-                    message: format!(
-                        "time limit of {:.1} s reached",
-                        self.c.time_limit.as_secs_f32()
-                    ),
+                    message: format!("time limit of {:?} reached", self.c.time_limit),
                     limit: true,
                 });
                 return None;
