@@ -15,6 +15,17 @@
 //! the bound cut something off and no plan was found, the search restarts with the bound
 //! doubled (iterative deepening). A search that ends with nothing cut off proves the problem
 //! unsolvable.
+//!
+//! Pruning that loses no plan (all of it sound):
+//! - *precondition pull-up* (`compile`): a method's precondition gains its first subtask's
+//!   precondition (evaluated in the same state) and the static literals of all its primitive
+//!   subtasks, climbing through single-method tasks, so bindings fail early and bind through
+//!   static facts (indexed by argument);
+//! - *goal relevance* (`search`): each suffix of the task network carries the set of goal
+//!   literals its tasks may achieve (per ground task, through the methods whose arguments and
+//!   static preconditions fit); a node where a false goal literal can no longer be achieved is
+//!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
+//!   achiever (a parameterless action) must be achieved while that literal is false.
 
 mod compile;
 mod eval;
