@@ -33,6 +33,8 @@ pub struct OracleConfig {
     pub facts: FactParams,
     /// Constraint overrides passed to every GTP call (`time-limit`, `max-points`...).
     pub constraints: Vec<(String, String)>,
+    /// Print every GTP request and its outcome to standard error (`HTNGTP_TRACE=1`).
+    pub trace: bool,
 }
 
 impl Default for OracleConfig {
@@ -42,6 +44,7 @@ impl Default for OracleConfig {
             effort_threshold: 1,
             facts: FactParams::default(),
             constraints: Vec::new(),
+            trace: std::env::var_os("HTNGTP_TRACE").is_some(),
         }
     }
 }
@@ -73,20 +76,10 @@ struct Frame {
     fingerprint: u64,
 }
 
-/// An open solution stream: one GTP task, or a compound `pick-and-X` run as a pick followed by X
-/// in the world the pick left (every pick solution, in turn, with every X solution).
-enum Stream {
-    Single {
-        task: String,
-        gtp: SolutionStream,
-    },
-    Sequence {
-        task: String,
-        first: SolutionStream,
-        second_task: String,
-        args: Vec<String>,
-        current: Option<(Solution, SolutionStream)>,
-    },
+/// An open solution stream of one GTP task.
+struct Stream {
+    task: String,
+    gtp: SolutionStream,
 }
 
 /// The GTP as an HTN oracle. See the module docs.
@@ -225,88 +218,28 @@ impl GtpOracle {
         &mut self,
         id: u64,
     ) -> Result<(Option<Solution>, Stats, String, Option<String>), OracleError> {
-        let Some(stream) = self.streams.remove(&id) else {
-            return Err(OracleError(format!("unknown stream {id}")));
-        };
-        let (result, stream) = match stream {
-            Stream::Single { task, mut gtp } => {
-                let before = gtp.stats();
-                let sol = gtp.next();
-                let delta = diff_stats(&gtp.stats(), &before);
-                let failure = gtp.failure().map(|f| f.to_string());
-                (
-                    (sol, delta, task.clone(), failure),
-                    Stream::Single { task, gtp },
-                )
-            }
-            Stream::Sequence {
-                task,
-                mut first,
-                second_task,
-                args,
-                mut current,
-            } => {
-                let mut delta = Stats::default();
-                let mut failure = None;
-                let sol = loop {
-                    if let Some((pick, second)) = current.as_mut() {
-                        let before = second.stats();
-                        let next = second.next();
-                        add_stats(&mut delta, &diff_stats(&second.stats(), &before));
-                        if let Some(mut s) = next {
-                            s.summary
-                                .trajectories
-                                .splice(0..0, pick.summary.trajectories.iter().cloned());
-                            if s.summary.grasp.is_none() {
-                                s.summary.grasp = pick.summary.grasp.clone();
-                            }
-                            break Some(s);
-                        }
-                        failure = second.failure().map(|f| f.to_string());
-                        current = None;
-                    }
-                    let before = first.stats();
-                    let next = first.next();
-                    add_stats(&mut delta, &diff_stats(&first.stats(), &before));
-                    match next {
-                        None => {
-                            if failure.is_none() {
-                                failure = first.failure().map(|f| format!("pick: {f}"));
-                            }
-                            break None;
-                        }
-                        Some(pick) => {
-                            let second = self.run(&pick.world, &second_task, &args)?;
-                            current = Some((pick, second));
-                        }
-                    }
-                };
-                (
-                    (sol, delta, task.clone(), failure),
-                    Stream::Sequence {
-                        task,
-                        first,
-                        second_task,
-                        args,
-                        current,
-                    },
-                )
-            }
-        };
-        self.streams.insert(id, stream);
-        Ok(result)
+        let stream = self
+            .streams
+            .get_mut(&id)
+            .ok_or_else(|| OracleError(format!("unknown stream {id}")))?;
+        let before = stream.gtp.stats();
+        let sol = stream.gtp.next();
+        let delta = diff_stats(&stream.gtp.stats(), &before);
+        let failure = stream.gtp.failure().map(|f| f.to_string());
+        Ok((sol, delta, stream.task.clone(), failure))
     }
 }
 
-/// The GTP tasks a compound task runs in sequence (`pick-and-show` = pick, then show).
-/// `pick-and-make-accessible` is a task of the GTP itself (grasp chosen for the placement).
-fn compound_parts(task: &str) -> Option<&str> {
+/// The GTP task that answers a compound task of the paper (PICK grouped with the GTP task after
+/// it). The GTP's placing and handing-over tasks grasp the object themselves when it is not yet
+/// held, choosing the grasp with the placement in view, which is what the compound task asks.
+fn gtp_task(task: &str) -> &str {
     match task {
-        "pick-and-show" => Some("show"),
-        "pick-and-give" => Some("give"),
-        "pick-and-put-away" => Some("put-away"),
-        "pick-and-place-on" | "pick-and-put-on" => Some("place-on"),
-        _ => None,
+        "pick-and-show" => "show",
+        "pick-and-give" => "give",
+        "pick-and-put-away" => "put-away",
+        "pick-and-place-on" | "pick-and-put-on" => "place-on",
+        other => other,
     }
 }
 
@@ -317,18 +250,9 @@ impl GeometricOracle for GtpOracle {
 
     fn open(&mut self, task: &str, args: &[String]) -> Result<StreamId, OracleError> {
         let world = self.world().clone();
-        let stream = match compound_parts(task) {
-            Some(second) => Stream::Sequence {
-                task: task.to_string(),
-                first: self.run(&world, "pick", &args[..1.min(args.len())])?,
-                second_task: second.to_string(),
-                args: args.to_vec(),
-                current: None,
-            },
-            None => Stream::Single {
-                task: task.to_string(),
-                gtp: self.run(&world, task, args)?,
-            },
+        let stream = Stream {
+            task: task.to_string(),
+            gtp: self.run(&world, gtp_task(task), args)?,
         };
         let id = self.next_stream;
         self.next_stream += 1;
@@ -366,6 +290,20 @@ impl GeometricOracle for GtpOracle {
         s.orientations += delta.orientations as u64;
         s.planner_calls += delta.planner_calls as u64;
         s.facts_time_s += t0.elapsed().as_secs_f64();
+        if self.config.trace {
+            let args = self.stream_args.get(&stream.0).cloned().unwrap_or_default();
+            eprintln!(
+                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}",
+                args.join(", "),
+                if result.is_some() { "solution" } else { "none" },
+                delta.time_s * 1e3,
+                t0.elapsed().as_secs_f64() * 1e3,
+                failure
+                    .as_ref()
+                    .map(|f| format!(": {f}"))
+                    .unwrap_or_default()
+            );
+        }
         if result.is_none() {
             let why = failure.unwrap_or_else(|| "no further solution".into());
             s.last_failure = Some(why.clone());
@@ -452,12 +390,4 @@ fn diff_stats(after: &Stats, before: &Stats) -> Stats {
         planner_calls: after.planner_calls.saturating_sub(before.planner_calls),
         ..Stats::default()
     }
-}
-
-fn add_stats(acc: &mut Stats, d: &Stats) {
-    acc.time_s += d.time_s;
-    acc.points += d.points;
-    acc.grasps += d.grasps;
-    acc.orientations += d.orientations;
-    acc.planner_calls += d.planner_calls;
 }
