@@ -40,5 +40,6 @@ pub mod rrt;
 pub mod search;
 pub mod solution;
 pub mod stats;
+pub mod target;
 pub mod task;
 pub mod verify;

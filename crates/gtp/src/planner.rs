@@ -81,8 +81,11 @@ pub struct Task {
     pub support: Option<ObjectId>,
     /// The human concerned (show, give, make-accessible, put-away).
     pub human: Option<AgentId>,
-    /// The point to reach (navigate-to: the target object's or agent's centre).
+    /// The point to reach (navigate-to: the target object's centre or agent's eyes).
     pub target_point: Option<Vector>,
+    /// The object to reach (navigate-to an object): furniture counts as reached when a point of
+    /// its support surface is (see [`crate::target::ReachTarget`]).
+    pub target_object: Option<ObjectId>,
 }
 
 impl Task {
@@ -117,6 +120,7 @@ impl Task {
             support: None,
             human: None,
             target_point: None,
+            target_object: None,
         };
         for (role, name) in roles.iter().zip(args) {
             match *role {
@@ -168,6 +172,7 @@ impl Task {
                     // navigate-to: an object or an agent.
                     if let Some(id) = world.object_id(name) {
                         task.target_point = Some(world.object_aabb(id).center());
+                        task.target_object = Some(id);
                     } else if let Some(a) = world.agent_id(name) {
                         task.target_point = Some(world.eye_pose(a).translation);
                     } else {

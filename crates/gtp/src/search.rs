@@ -30,6 +30,7 @@ use crate::solution::{
     GraspRecord, HeldRecord, Phase, PlacementRecord, SolutionSummary, Trajectory,
 };
 use crate::stats::Stats;
+use crate::target::ReachTarget;
 use crate::task::{Constraints, TaskKind};
 
 /// How far a stage of the funnel got, for the failure report (later stages are deeper).
@@ -1741,24 +1742,15 @@ impl Search {
     fn next_navigation(&mut self) -> Option<Solution> {
         let began = Instant::now();
         let robot = self.setup.agent;
-        let target = self.task.target_point?;
+        let target = match self.task.target_object {
+            Some(o) => ReachTarget::object(&self.world, o),
+            None => ReachTarget::Point(self.task.target_point?),
+        };
         if self.points.is_none() {
-            // Base poses on rings around the target, facing it, nearest the current base first.
-            let st = self.world.agent_state(robot);
-            let cur = st.base.translation;
-            let mut cands = Vec::new();
-            for r in [0.55f32, 0.65, 0.75, 0.85] {
-                for k in 0..24 {
-                    let a = std::f32::consts::TAU * k as f32 / 24.0;
-                    cands.push(Vector::new(
-                        target.x + r * a.cos(),
-                        target.y + r * a.sin(),
-                        0.0,
-                    ));
-                }
-            }
-            cands.sort_by(|a, b| (*a - cur).length().total_cmp(&(*b - cur).length()));
-            self.points = Some(cands);
+            // Base poses around the target's footprint, facing it, nearest the current base
+            // first.
+            let cur = self.world.agent_state(robot).base.translation;
+            self.points = Some(target.base_positions(cur));
             self.pi = 0;
         }
         let rreach = self.world.agent(robot).reach;
@@ -1801,7 +1793,8 @@ impl Search {
             let c = cands[self.pi];
             self.pi += 1;
             self.stats.points += 1;
-            let yaw = (target.y - c.y).atan2(target.x - c.x);
+            let aim = target.nearest(c);
+            let yaw = (aim.y - c.y).atan2(aim.x - c.x);
             let base = geometry::world::base_pose(c.x, c.y, yaw);
             checker.set_base(base);
             if !checker.is_config_free(&q) {
@@ -1811,7 +1804,7 @@ impl Search {
                 continue;
             }
             let sh = effort::shoulders(&self.world, robot, base, &q);
-            if !sh.iter().any(|s| (*s - target).length() <= rreach) {
+            if !target.within_reach(&sh, rreach) {
                 self.reject(Stage::Reach, || {
                     "the target is out of the arm's reach from every free base pose".into()
                 });

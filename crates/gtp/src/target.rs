@@ -1,0 +1,153 @@
+//! What `navigate-to` must bring within the arm's reach, and where the base may stand for it.
+//!
+//! A small object or an agent is a point (its centre, an agent's eyes). Furniture is not: the
+//! desk's centre lies 0.9 m inside its top, out of reach from anywhere beside it. For an object
+//! with support surfaces, "in reach" means a point of one of those surfaces is within reach (the
+//! point nearest the shoulder); for another large object, the point of its shape nearest the
+//! shoulder. Base poses are then tried around the target's footprint, not around its centre.
+
+use geometry::scene::ObjectId;
+use geometry::world::World;
+use parry3d::math::{Pose, Vector};
+use parry3d::shape::SharedShape;
+
+/// An object whose footprint has a half size above this (metres) is large: reached at its
+/// surface rather than at its centre.
+const LARGE_HALF_SIZE: f32 = 0.25;
+
+/// The region whose nearest point must be within the arm's reach.
+#[derive(Clone)]
+pub enum ReachTarget {
+    /// One point: a small object's centre, an agent's eyes.
+    Point(Vector),
+    /// Support-surface rectangles: world pose of each centre (rectangle in its x-y plane) and
+    /// half sizes.
+    Surfaces(Vec<(Pose, [f32; 2])>),
+    /// A large object's shape at its world pose.
+    Shape(SharedShape, Pose),
+}
+
+/// Base stand-off distances (metres) from the footprint of a point target (the rings the base
+/// poses lie on).
+const POINT_RINGS: [f32; 4] = [0.55, 0.65, 0.75, 0.85];
+/// Same, from the edge of a large target's footprint (the PR2's base reaches 0.33 m from its
+/// centre; the arm then leans over the edge).
+const EDGE_RINGS: [f32; 4] = [0.4, 0.5, 0.6, 0.75];
+
+impl ReachTarget {
+    /// The target of `navigate-to` an object in `world`.
+    pub fn object(world: &World, id: ObjectId) -> ReachTarget {
+        let o = world.object(id);
+        let aabb = world.object_aabb(id);
+        let half = aabb.half_extents();
+        if !o.surfaces.is_empty() {
+            let pose = world.object_pose(id);
+            ReachTarget::Surfaces(
+                o.surfaces
+                    .iter()
+                    .map(|s| (pose * Pose::from_translation(s.centre), s.half_extents))
+                    .collect(),
+            )
+        } else if half.x.max(half.y) > LARGE_HALF_SIZE {
+            ReachTarget::Shape(o.shape.clone(), world.object_shape_pose(id))
+        } else {
+            ReachTarget::Point(aabb.center())
+        }
+    }
+
+    /// The point of the target nearest `p`.
+    pub fn nearest(&self, p: Vector) -> Vector {
+        match self {
+            ReachTarget::Point(c) => *c,
+            ReachTarget::Surfaces(list) => list
+                .iter()
+                .map(|(pose, h)| {
+                    let local = pose.inverse_transform_point(p);
+                    let clamped =
+                        Vector::new(local.x.clamp(-h[0], h[0]), local.y.clamp(-h[1], h[1]), 0.0);
+                    pose.transform_point(clamped)
+                })
+                .min_by(|a, b| (*a - p).length().total_cmp(&(*b - p).length()))
+                .unwrap_or(p),
+            ReachTarget::Shape(shape, pose) => shape.project_point(pose, p, true).point,
+        }
+    }
+
+    /// Whether a point of the target lies within `reach` of one of `shoulders`.
+    pub fn within_reach(&self, shoulders: &[Vector], reach: f32) -> bool {
+        shoulders
+            .iter()
+            .any(|s| (self.nearest(*s) - *s).length() <= reach)
+    }
+
+    /// The target's footprint on the floor: `(min, max)` corners in x-y (a point for a point
+    /// target).
+    fn footprint(&self) -> ([f32; 2], [f32; 2]) {
+        let mut lo = [f32::INFINITY; 2];
+        let mut hi = [f32::NEG_INFINITY; 2];
+        let mut add = |v: Vector| {
+            lo = [lo[0].min(v.x), lo[1].min(v.y)];
+            hi = [hi[0].max(v.x), hi[1].max(v.y)];
+        };
+        match self {
+            ReachTarget::Point(c) => add(*c),
+            ReachTarget::Surfaces(list) => {
+                for (pose, h) in list {
+                    for (sx, sy) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
+                        add(pose.transform_point(Vector::new(sx * h[0], sy * h[1], 0.0)));
+                    }
+                }
+            }
+            ReachTarget::Shape(shape, pose) => {
+                let b = shape.compute_aabb(pose);
+                add(b.mins);
+                add(b.maxs);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Candidate base positions (z = 0): on rounded rectangles at the stand-off distances
+    /// around the footprint, about 0.15 m apart (24 per ring around a point), nearest `from`
+    /// first.
+    pub fn base_positions(&self, from: Vector) -> Vec<Vector> {
+        let (lo, hi) = self.footprint();
+        let rings: &[f32] = match self {
+            ReachTarget::Point(_) => &POINT_RINGS,
+            _ => &EDGE_RINGS,
+        };
+        let mut out = Vec::new();
+        for &r in rings {
+            // Corners: quarter circles; sides: straight runs.
+            let corners = [
+                (hi[0], hi[1]),
+                (lo[0], hi[1]),
+                (lo[0], lo[1]),
+                (hi[0], lo[1]),
+            ];
+            for (q, &(cx, cy)) in corners.iter().enumerate() {
+                let a0 = std::f32::consts::FRAC_PI_2 * q as f32;
+                for k in 0..6 {
+                    let a = a0 + std::f32::consts::FRAC_PI_2 * k as f32 / 6.0;
+                    out.push(Vector::new(cx + r * a.cos(), cy + r * a.sin(), 0.0));
+                }
+                // The side from this corner's quarter circle end to the next corner.
+                let (nx, ny) = corners[(q + 1) % 4];
+                let a1 = a0 + std::f32::consts::FRAC_PI_2;
+                let (dx, dy) = (nx - cx, ny - cy);
+                let len = (dx * dx + dy * dy).sqrt();
+                let n = (len / 0.15).floor() as usize;
+                for k in 0..n {
+                    let t = k as f32 / n as f32;
+                    out.push(Vector::new(
+                        cx + t * dx + r * a1.cos(),
+                        cy + t * dy + r * a1.sin(),
+                        0.0,
+                    ));
+                }
+            }
+        }
+        out.sort_by(|a, b| (*a - from).length().total_cmp(&(*b - from).length()));
+        out
+    }
+}
