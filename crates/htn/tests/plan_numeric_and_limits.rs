@@ -106,6 +106,28 @@ fn the_memory_limit_stops_the_search_and_says_so() {
 }
 
 #[test]
+fn goal_relevance_cuts_dead_ends_early() {
+    // 24 switches, each tried off first: checking the goal only at the end would need about
+    // 2^24 nodes; with goal relevance a switch left off is a dead end at once.
+    let (d, p) = load("switches-domain.hddl", "switches-24.hddl");
+    let opts = PlannerOptions {
+        limits: Limits {
+            nodes: Some(20_000),
+            ..Limits::default()
+        },
+        ..PlannerOptions::default()
+    };
+    let r = plan(&d, &p, &opts, None).unwrap();
+    let Outcome::Found { plan } = r.outcome else {
+        panic!("no plan within 20000 nodes: {:?}", r.outcome)
+    };
+    validate(&d, &p, &plan, &[]).unwrap();
+    assert!(plan.actions.iter().all(|a| a.name == "turn-on"));
+    assert_eq!(plan.actions.len(), 24);
+    assert!(r.stats.goal_pruned > 0);
+}
+
+#[test]
 fn the_search_is_deterministic_for_a_seed() {
     let (d, p) = load("payment-domain.hddl", "payment-credit-7.hddl");
     let opts = PlannerOptions {

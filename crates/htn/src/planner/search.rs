@@ -9,7 +9,7 @@ use crate::oracle::{GeoSolution, GeometricOracle, OracleError, StreamId};
 use crate::plan::{Decomposition, GeoStep, Plan, PlanAction};
 use crate::state::{FxHasher, Interner, State, mix64};
 
-use super::compile::{CEffect, CFormula, CTerm, Compiled};
+use super::compile::{CEffect, CFormula, CLit, CTerm, Compiled};
 use super::eval::{EffectBuf, Eval, UNBOUND};
 use super::{
     Limit, Outcome, PlanError, PlannerOptions, SearchResult, SearchStats, Strategy, current_rss_kb,
@@ -591,6 +591,11 @@ impl<'a, 'o> Search<'a, 'o> {
                         }
                     }
                 }
+                // A static atom with one unbound slot binds it when the facts allow a single
+                // value (none: the method never applies).
+                if !self.bind_by_static_facts(&method.pre, &mut b) {
+                    continue 'methods;
+                }
                 // Static literals whose slots are all bound must hold.
                 let ev = Eval {
                     c,
@@ -629,6 +634,77 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         self.may_memo[gt as usize] = (2, id);
         id
+    }
+
+    /// Binds slots through static atoms that leave a single candidate; `false` if one leaves none.
+    fn bind_by_static_facts(&self, pre: &[CLit], b: &mut [u32]) -> bool {
+        loop {
+            let mut changed = false;
+            for l in pre {
+                let CFormula::Atom(p, args) = &l.f else {
+                    continue;
+                };
+                if !self.state.is_static(*p) {
+                    continue;
+                }
+                let unbound: Vec<u16> = l
+                    .vars
+                    .iter()
+                    .copied()
+                    .filter(|&v| b[v as usize] == UNBOUND)
+                    .collect();
+                let [v] = unbound[..] else {
+                    continue;
+                };
+                // Candidates: through the index on some bound argument, else all facts.
+                let mut cands = self.state.facts_of(*p);
+                for (k, t) in args.iter().enumerate() {
+                    let o = match *t {
+                        CTerm::Obj(o) => o,
+                        CTerm::Var(x) => b[x as usize],
+                    };
+                    if o != UNBOUND {
+                        let c = self.state.static_facts_with(*p, k, o);
+                        if c.len() < cands.len() {
+                            cands = c;
+                        }
+                    }
+                }
+                let mut value = UNBOUND;
+                let mut several = false;
+                for &f in cands {
+                    let fa = self.state.fact_args(f);
+                    let mut cand = UNBOUND;
+                    let fits = args.iter().zip(fa).all(|(t, &x)| match *t {
+                        CTerm::Obj(o) => o == x,
+                        CTerm::Var(y) if y == v => {
+                            let ok = cand == UNBOUND || cand == x;
+                            cand = x;
+                            ok
+                        }
+                        CTerm::Var(y) => b[y as usize] == x,
+                    });
+                    if fits {
+                        if value == UNBOUND {
+                            value = cand;
+                        } else if value != cand {
+                            several = true;
+                            break;
+                        }
+                    }
+                }
+                if value == UNBOUND {
+                    return false;
+                }
+                if !several {
+                    b[v as usize] = value;
+                    changed = true;
+                }
+            }
+            if !changed {
+                return true;
+            }
+        }
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
