@@ -33,10 +33,10 @@ pub struct Randomization {
 impl Default for Randomization {
     fn default() -> Self {
         Randomization {
-            object_shift: 0.05,
-            object_turn: 0.35,
-            human_shift: 0.08,
-            human_turn: 0.15,
+            object_shift: 0.03,
+            object_turn: 0.17,
+            human_shift: 0.05,
+            human_turn: 0.1,
         }
     }
 }
