@@ -315,6 +315,9 @@ impl<'a> ArmMotion<'a> {
     ) -> ArmMotion<'a> {
         let mut checker = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
         checker.set_held_object(held);
+        // Only the arm's joints change between checks: the rest of the robot's poses and
+        // collisions are computed once.
+        checker.set_fixed_joints(&template, &arm.chain.dofs);
         ArmMotion {
             setup,
             arm,
