@@ -99,6 +99,12 @@ fn bench_rrt(c: &mut Criterion) {
             g.bench_function("one collision check", |b| {
                 b.iter(|| black_box(motion.free(&start)))
             });
+            // As the planner checks: only the arm's links move.
+            let checker = motion.arm_checker();
+            let full = motion.full(&start);
+            g.bench_function("one collision check, arm only", |b| {
+                b.iter(|| black_box(checker.is_config_free(&full)))
+            });
         }
     }
     g.finish();

@@ -315,9 +315,6 @@ impl<'a> ArmMotion<'a> {
     ) -> ArmMotion<'a> {
         let mut checker = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
         checker.set_held_object(held);
-        // Only the arm's joints change between checks: the rest of the robot's poses and
-        // collisions are computed once.
-        checker.set_fixed_joints(&template, &arm.chain.dofs);
         ArmMotion {
             setup,
             arm,
@@ -325,6 +322,15 @@ impl<'a> ArmMotion<'a> {
             template,
             base,
         }
+    }
+
+    /// A checker for many configurations of this arm: only the arm's joints change between
+    /// checks, so the rest of the robot's poses and collisions are computed once here (worth it
+    /// from a few checks on: motion planning, straight moves).
+    pub fn arm_checker(&self) -> CollisionChecker {
+        let mut checker = self.checker.clone();
+        checker.set_fixed_joints(&self.template, &self.arm.chain.dofs);
+        checker
     }
 
     /// Whether the arm values `qa` are collision-free.
@@ -452,6 +458,8 @@ impl<'a> ArmMotion<'a> {
         checks: &mut usize,
     ) -> Result<JointPath, String> {
         let start = self.tool_pose(from);
+        let checker = self.arm_checker();
+        let mut full = self.template.clone();
         let mut waypoints = vec![from.to_vec()];
         let fine = params.resolution / params.certify_factor.max(1) as f32;
         for s in 1..=steps {
@@ -467,8 +475,9 @@ impl<'a> ArmMotion<'a> {
             }
             let mut bad = None;
             let mut valid = |qa: &[f32]| {
-                if let Some(c) = self.collision(qa) {
-                    bad = Some(c);
+                set_arm_values(self.arm, &mut full, qa);
+                if let Some(c) = checker.first_collision(&full) {
+                    bad = Some(c.to_string());
                     false
                 } else if !extra(qa) {
                     bad = Some("the gripper touches the object".into());
@@ -493,6 +502,12 @@ impl<'a> ArmMotion<'a> {
         params: &RrtParams,
         rng: &mut fastrand::Rng,
     ) -> Result<(JointPath, rrt::RrtStats), rrt::RrtError> {
-        rrt::plan(&self.arm.space, from, to, |qa| self.free(qa), params, rng).map_err(|(e, _)| e)
+        let checker = self.arm_checker();
+        let mut full = self.template.clone();
+        let valid = |qa: &[f32]| {
+            set_arm_values(self.arm, &mut full, qa);
+            checker.is_config_free(&full)
+        };
+        rrt::plan(&self.arm.space, from, to, valid, params, rng).map_err(|(e, _)| e)
     }
 }
