@@ -1192,13 +1192,17 @@ impl Search {
         };
         self.stats.visibility_checks += 1;
         let full = self.cfg.visibility_resolution;
-        if self.c.max_visibility.is_some() && full > 8 {
+        if let Some(max) = self.c.max_visibility {
             // Hiding: one ray reaching the object unblocked already shows it, so a coarse
-            // grid proves most failures at a sixteenth of the cost.
-            let coarse = measure_visibility(world, h, o, level, 8);
-            if coarse > self.c.max_visibility.unwrap_or(0.0) {
-                return coarse;
+            // grid proves most failures at a sixteenth of the cost; and the first view (head
+            // as it is, turned, other stances) that shows too much ends the measure.
+            if full > 8 {
+                let coarse = visibility_upto(world, h, o, level, 8, Some(max));
+                if coarse > max {
+                    return coarse;
+                }
             }
+            return visibility_upto(world, h, o, level, full, Some(max));
         }
         measure_visibility(world, h, o, level, full)
     }
@@ -1919,11 +1923,32 @@ pub fn measure_visibility(
     level: u8,
     resolution: usize,
 ) -> f32 {
+    visibility_upto(world, h, o, level, resolution, None)
+}
+
+/// [`measure_visibility`], stopping at the first view whose visibility exceeds `stop_above`
+/// (the result is then that view's, a lower bound of the best: enough to reject a hiding
+/// place).
+fn visibility_upto(
+    world: &World,
+    h: AgentId,
+    o: ObjectId,
+    level: u8,
+    resolution: usize,
+    stop_above: Option<f32>,
+) -> f32 {
+    let done = |v: f32| stop_above.is_some_and(|m| v > m);
     let mut v = visibility::visibility_for_agent(world, h, o, Aim::Current, resolution).fraction();
+    if done(v) {
+        return v;
+    }
     if level >= 1 {
         v = v.max(
             visibility::visibility_for_agent(world, h, o, Aim::AtTarget, resolution).fraction(),
         );
+        if done(v) {
+            return v;
+        }
     }
     for l in 2..=level {
         for st in effort::stances(world, h, l, None) {
@@ -1932,6 +1957,9 @@ pub fn measure_visibility(
             v = v.max(
                 visibility::visibility_for_agent(&w, h, o, Aim::AtTarget, resolution).fraction(),
             );
+            if done(v) {
+                return v;
+            }
         }
     }
     v
