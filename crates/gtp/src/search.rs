@@ -129,6 +129,9 @@ pub(crate) struct Search {
 }
 
 const STRAIGHT_STEPS: usize = 3;
+/// Candidate points of a hiding task: distance bins (metres) within which the best hidden
+/// come first.
+const BIN: f32 = 0.5;
 /// Lift height during which the object may still touch what it rested on.
 const UNSTICK: f32 = 0.02;
 
@@ -716,14 +719,51 @@ impl Search {
                 }
             },
         };
-        pts.sort_by(|a, b| {
-            (*a - anchor)
-                .length()
-                .total_cmp(&(*b - anchor).length())
+        // Hiding: the best hidden first, by a cheap score (clear lines of sight from the
+        // human's eyes to the top corners and centre of the object's box there), so that
+        // the pixel-visibility test, the costly one, mostly confirms.
+        let hiding = c.max_visibility.is_some() && self.human.is_some() && !kind.hands_over();
+        let shown = |p: &Vector| -> usize {
+            if !hiding {
+                return 0;
+            }
+            let eye = self.world.eye_pose(self.human.unwrap()).translation;
+            let r = self
+                .object
+                .map(|o| {
+                    let h = self.world.object(o).local_aabb.half_extents();
+                    h.x.max(h.y)
+                })
+                .unwrap_or(0.05);
+            let top = *p + Vector::Z * (2.0 * obj_h);
+            [
+                top,
+                top + Vector::new(r, r, 0.0),
+                top + Vector::new(r, -r, 0.0),
+                top + Vector::new(-r, r, 0.0),
+                top + Vector::new(-r, -r, 0.0),
+            ]
+            .iter()
+            .filter(|t| self.line_of_sight(eye, **t))
+            .count()
+        };
+        // Distance to the anchor in bins of BIN metres, then the hiding score.
+        let mut scored: Vec<((usize, usize, f32), Vector)> = pts
+            .iter()
+            .map(|p| {
+                let d = (*p - anchor).length();
+                (((d / BIN) as usize, shown(p), d), *p)
+            })
+            .collect();
+        scored.sort_by(|(sa, a), (sb, b)| {
+            (sa.0, sa.1)
+                .cmp(&(sb.0, sb.1))
+                .then(sa.2.total_cmp(&sb.2))
                 .then(a.x.total_cmp(&b.x))
                 .then(a.y.total_cmp(&b.y))
                 .then(a.z.total_cmp(&b.z))
         });
+        let mut pts: Vec<Vector> = scored.into_iter().map(|(_, p)| p).collect();
         pts.truncate(c.max_points);
         if pts.is_empty() {
             let r = self.no_points_reason(level);
