@@ -38,6 +38,7 @@ fn main() {
         ("place-on", &["grey-book", "desk"]),
         ("pick-and-make-accessible", &["grey-book", "member"]),
         ("navigate-to", &["white-book"]),
+        ("navigate-to", &["desk"]),
     ];
     let planner = Planner::new();
     println!(
