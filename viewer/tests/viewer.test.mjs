@@ -25,7 +25,7 @@ const somePose = { t: [0, 0, 0], q: [0, 0, 0, 1] };
 
 // Bad documents, each with what the error panel must say.
 const BAD = {
-  '/bad/truncated.json': { text: PLAN_TEXT.slice(0, Math.floor(PLAN_TEXT.length / 2)), says: ['not valid JSON', 'line 1 column'] },
+  '/bad/truncated.json': { text: PLAN_TEXT.slice(0, Math.floor(PLAN_TEXT.length / 2)), says: ['not valid JSON', 'column'] },
   '/bad/empty.json': { text: '', says: ['not valid JSON'] },
   '/bad/not-a-plan.json': { text: '{"hello": "world"}', says: ['format', 'not an htngtp plan JSON'] },
   '/bad/version.json': { text: variant((p) => (p.version = 99)), says: ['version', 'reads version 1, found 99'] },
@@ -33,15 +33,20 @@ const BAD = {
     text: variant((p) => (p.steps[p.steps.length - 1].object_poses['blue-book'] = somePose)),
     says: [`steps[${PLAN.steps.length - 1}].object_poses.blue-book`, 'unknown object "blue-book"'],
   },
-  '/bad/missing-field.json': {
-    text: variant((p) => delete p.scene.objects[0].shape),
-    says: ['scene.objects[0].shape: missing'],
-  },
   '/bad/tree-step.json': {
     text: variant((p) => (p.tree.find((n) => n.step !== undefined && n.step !== null).step = 999)),
     says: ['step 999 does not exist'],
   },
 };
+
+// An object described by one shape (not by parts) loses it.
+const simple = PLAN.scene.objects.findIndex((o) => o.shape && !o.parts);
+if (simple >= 0) {
+  BAD['/bad/missing-field.json'] = {
+    text: variant((p) => delete p.scene.objects[simple].shape),
+    says: [`scene.objects[${simple}].shape: missing`],
+  };
+}
 
 if (firstGtpStep >= 0) {
   BAD['/bad/unknown-link.json'] = {
