@@ -79,6 +79,7 @@ struct Frame {
 /// An open solution stream of one GTP task.
 struct Stream {
     task: String,
+    args: Vec<String>,
     gtp: SolutionStream,
 }
 
@@ -96,8 +97,6 @@ pub struct GtpOracle {
     stats: HashMap<String, TaskStats>,
     /// The last request that found no solution: task, arguments, why.
     last_failure: Option<(String, Vec<String>, String)>,
-    /// Arguments of each open stream (for failure reports).
-    stream_args: HashMap<u64, Vec<String>>,
 }
 
 impl GtpOracle {
@@ -120,7 +119,6 @@ impl GtpOracle {
             next_stream: 0,
             stats: HashMap::new(),
             last_failure: None,
-            stream_args: HashMap::new(),
         };
         let frame = oracle.frame(world);
         oracle.stack.push(frame);
@@ -217,7 +215,7 @@ impl GtpOracle {
     fn pull(
         &mut self,
         id: u64,
-    ) -> Result<(Option<Solution>, Stats, String, Option<String>), OracleError> {
+    ) -> Result<(Option<Solution>, Stats, String, Vec<String>, Option<String>), OracleError> {
         let stream = self
             .streams
             .get_mut(&id)
@@ -226,7 +224,13 @@ impl GtpOracle {
         let sol = stream.gtp.next();
         let delta = diff_stats(&stream.gtp.stats(), &before);
         let failure = stream.gtp.failure().map(|f| f.to_string());
-        Ok((sol, delta, stream.task.clone(), failure))
+        Ok((
+            sol,
+            delta,
+            stream.task.clone(),
+            stream.args.clone(),
+            failure,
+        ))
     }
 }
 
@@ -252,17 +256,17 @@ impl GeometricOracle for GtpOracle {
         let world = self.world().clone();
         let stream = Stream {
             task: task.to_string(),
+            args: args.to_vec(),
             gtp: self.run(&world, gtp_task(task), args)?,
         };
         let id = self.next_stream;
         self.next_stream += 1;
         self.streams.insert(id, stream);
-        self.stream_args.insert(id, args.to_vec());
         Ok(StreamId(id))
     }
 
     fn next_solution(&mut self, stream: StreamId) -> Result<Option<GeoSolution>, OracleError> {
-        let (solution, delta, task, failure) = self.pull(stream.0)?;
+        let (solution, delta, task, args, failure) = self.pull(stream.0)?;
         let t0 = Instant::now();
         let result = match solution {
             None => None,
@@ -291,7 +295,6 @@ impl GeometricOracle for GtpOracle {
         s.planner_calls += delta.planner_calls as u64;
         s.facts_time_s += t0.elapsed().as_secs_f64();
         if self.config.trace {
-            let args = self.stream_args.get(&stream.0).cloned().unwrap_or_default();
             eprintln!(
                 "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}",
                 args.join(", "),
@@ -307,7 +310,6 @@ impl GeometricOracle for GtpOracle {
         if result.is_none() {
             let why = failure.unwrap_or_else(|| "no further solution".into());
             s.last_failure = Some(why.clone());
-            let args = self.stream_args.get(&stream.0).cloned().unwrap_or_default();
             self.last_failure = Some((task, args, why));
         }
         Ok(result)
@@ -315,7 +317,6 @@ impl GeometricOracle for GtpOracle {
 
     fn close(&mut self, stream: StreamId) {
         self.streams.remove(&stream.0);
-        self.stream_args.remove(&stream.0);
     }
 
     fn apply(&mut self, solution: &GeoSolution) -> Result<(), OracleError> {
