@@ -83,6 +83,16 @@ struct Stream {
     gtp: SolutionStream,
 }
 
+/// One solution request's outcome: the solution if any, the statistics of that request, the
+/// stream's task and arguments, and why the stream ended when it did.
+struct Pulled {
+    solution: Option<Solution>,
+    delta: Stats,
+    task: String,
+    args: Vec<String>,
+    failure: Option<String>,
+}
+
 /// The GTP as an HTN oracle. See the module docs.
 pub struct GtpOracle {
     planner: Arc<Planner>,
@@ -212,10 +222,7 @@ impl GtpOracle {
     }
 
     /// Pulls the next solution of a stream, with the statistics of that request.
-    fn pull(
-        &mut self,
-        id: u64,
-    ) -> Result<(Option<Solution>, Stats, String, Vec<String>, Option<String>), OracleError> {
+    fn pull(&mut self, id: u64) -> Result<Pulled, OracleError> {
         let stream = self
             .streams
             .get_mut(&id)
@@ -266,7 +273,13 @@ impl GeometricOracle for GtpOracle {
     }
 
     fn next_solution(&mut self, stream: StreamId) -> Result<Option<GeoSolution>, OracleError> {
-        let (solution, delta, task, args, failure) = self.pull(stream.0)?;
+        let Pulled {
+            solution,
+            delta,
+            task,
+            args,
+            failure,
+        } = self.pull(stream.0)?;
         let t0 = Instant::now();
         let result = match solution {
             None => None,
