@@ -228,16 +228,14 @@ impl GtpOracle {
             .get_mut(&id)
             .ok_or_else(|| OracleError(format!("unknown stream {id}")))?;
         let before = stream.gtp.stats();
-        let sol = stream.gtp.next();
-        let delta = diff_stats(&stream.gtp.stats(), &before);
-        let failure = stream.gtp.failure().map(|f| f.to_string());
-        Ok((
-            sol,
-            delta,
-            stream.task.clone(),
-            stream.args.clone(),
-            failure,
-        ))
+        let solution = stream.gtp.next();
+        Ok(Pulled {
+            solution,
+            delta: diff_stats(&stream.gtp.stats(), &before),
+            task: stream.task.clone(),
+            args: stream.args.clone(),
+            failure: stream.gtp.failure().map(|f| f.to_string()),
+        })
     }
 }
 
