@@ -170,7 +170,10 @@ export class Ui {
     );
 
     const st = plan.stats;
-    const parts = Object.entries(st).map(([k, v]) => `${k.replace(/_/g, ' ')} ${typeof v === 'number' ? +v.toFixed(3) : String(v)}`);
+    // Scalars only: nested tables (per-GTP-task figures) are shown per step.
+    const parts = Object.entries(st)
+      .filter(([, v]) => typeof v !== 'object' || v === null)
+      .map(([k, v]) => `${k.replace(/_/g, ' ')} ${typeof v === 'number' ? +v.toFixed(3) : String(v)}`);
     this.planStats.textContent = parts.length > 0 ? `search: ${parts.join(' · ')}` : '';
   }
 
