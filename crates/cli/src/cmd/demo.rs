@@ -16,7 +16,8 @@ use crate::cmd::geo::{Outputs, run_plan};
                   makes it accessible to the member on the reception desk, brings the POS machine \
                   and puts it away afterwards), in the library scene of the paper's Fig. 4, with \
                   the variant of the domain used in the paper's experiment (PICK grouped with the \
-                  GTP task that follows it). Prints \
+                  GTP task that follows it) and geometric-first backtracking (other solutions of \
+                  earlier GTP tasks before HTN alternatives, the paper's Fig. 3). Prints \
                   the decomposition tree, the plan with each GS action's geometric solution and the \
                   statistics; writes the plan JSON (for `htngtp view`) and pictures of the world \
                   after each GS action into the output folder."
@@ -66,7 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         &dir.join("scene.toml"),
         PlannerOptions {
             seed: args.seed,
-            strategy: Strategy::Chronological,
+            strategy: Strategy::GeometricFirst { k: 3 },
             ..PlannerOptions::default()
         },
         OracleConfig {
