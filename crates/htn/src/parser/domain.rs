@@ -11,7 +11,6 @@ use super::context::{Ctx, Result, Scope, Tables};
 use super::error::ParseError;
 use super::formula::Evaluable;
 use super::sexpr::{Sexp, read, shorten};
-use super::tasknet::SubtaskList;
 use super::types::TypeTable;
 
 /// The items of `(define (KIND NAME) ...)`, the name and its span, from the top level of a file.
@@ -555,23 +554,7 @@ fn method(ctx: &Ctx, item: &Sexp) -> Result<Method> {
         None => Formula::True,
     };
 
-    let lists: Vec<(&str, Span, &Sexp)> = pairs
-        .iter()
-        .filter(|(k, _, _)| {
-            matches!(
-                *k,
-                ":subtasks" | ":tasks" | ":ordered-subtasks" | ":ordered-tasks"
-            )
-        })
-        .copied()
-        .collect();
-    if let Some((key, span, _)) = lists.get(1) {
-        return Err(ctx.err(*span, format!("{owner} has a second subtask list `{key}`")));
-    }
-    let list = lists.first().map(|(key, _, value)| SubtaskList {
-        value,
-        ordered: key.starts_with(":ordered"),
-    });
+    let list = ctx.subtask_list(&pairs, &owner)?;
     let subtasks = ctx.task_network(list, get(":ordering"), &scope, &owner)?;
 
     Ok(Method {

@@ -11,7 +11,6 @@ use super::domain::{define, section};
 use super::error::ParseError;
 use super::formula::Evaluable;
 use super::sexpr::{Sexp, read, shorten};
-use super::tasknet::SubtaskList;
 
 /// Parses a problem of `domain`.
 ///
@@ -296,23 +295,7 @@ fn network(ctx: &Ctx, items: &[Sexp]) -> Result<TaskNetwork> {
         None => Vec::new(),
     };
     let mut scope = Scope::new(&params);
-    let lists: Vec<(&str, Span, &Sexp)> = pairs
-        .iter()
-        .filter(|(k, _, _)| {
-            matches!(
-                *k,
-                ":subtasks" | ":tasks" | ":ordered-subtasks" | ":ordered-tasks"
-            )
-        })
-        .copied()
-        .collect();
-    if let Some((key, at, _)) = lists.get(1) {
-        return Err(ctx.err(*at, format!("{owner} has a second subtask list `{key}`")));
-    }
-    let list = lists.first().map(|(key, _, value)| SubtaskList {
-        value,
-        ordered: key.starts_with(":ordered"),
-    });
+    let list = ctx.subtask_list(&pairs, owner)?;
     let subtasks = ctx.task_network(list, get(":ordering"), &scope, owner)?;
     let constraints = match get(":constraints") {
         Some(v) => ctx.formula(

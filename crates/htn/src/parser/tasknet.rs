@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use crate::model::Subtask;
+use crate::model::{Span, Subtask};
 
 use super::context::{Ctx, Result, Scope, render_call};
 use super::sexpr::{Sexp, shorten};
@@ -21,6 +21,29 @@ pub(crate) struct SubtaskList<'s> {
 }
 
 impl Ctx<'_> {
+    /// The one subtask list among a method's or network's keyword pairs, whatever its spelling
+    /// (`:subtasks`, `:tasks`, `:ordered-subtasks`, `:ordered-tasks`); a second one is an error.
+    pub fn subtask_list<'s>(
+        &self,
+        pairs: &[(&'s str, Span, &'s Sexp)],
+        owner: &str,
+    ) -> Result<Option<SubtaskList<'s>>> {
+        let mut lists = pairs.iter().filter(|(k, _, _)| {
+            matches!(
+                *k,
+                ":subtasks" | ":tasks" | ":ordered-subtasks" | ":ordered-tasks"
+            )
+        });
+        let first = lists.next();
+        if let Some((key, span, _)) = lists.next() {
+            return Err(self.err(*span, format!("{owner} has a second subtask list `{key}`")));
+        }
+        Ok(first.map(|(key, _, value)| SubtaskList {
+            value,
+            ordered: key.starts_with(":ordered"),
+        }))
+    }
+
     /// The subtasks of a method or of the initial task network, in their one total order.
     /// `owner` names the method or network in messages.
     pub fn task_network(
