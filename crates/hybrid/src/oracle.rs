@@ -119,6 +119,9 @@ impl GtpOracle {
         config: OracleConfig,
     ) -> GtpOracle {
         let known: HashSet<String> = known.into_iter().map(|s| s.to_ascii_lowercase()).collect();
+        // Levels above the threshold never hold symbolically: don't examine them.
+        let mut config = config;
+        config.facts.max_effort = config.facts.max_effort.min(config.effort_threshold);
         let mut oracle = GtpOracle {
             planner,
             config,
