@@ -194,12 +194,11 @@ impl Search {
                     })?;
                 held = true;
                 let tool_in_object = att.grasp.inverse();
-                let width = model
-                    .local_aabb
-                    .half_extents()
-                    .min_element()
-                    .min(crate::gripper::MAX_OPENING / 2.0)
-                    * 2.0;
+                // The jaws close along the tool's y axis: the object's extent along it (its
+                // box's, exact for the boxes' axis-aligned grasps) is the grasp's width.
+                let close = (tool_in_object.rotation * Vector::Y).abs();
+                let h = model.local_aabb.half_extents();
+                let width = (2.0 * close.dot(h)).min(crate::gripper::MAX_OPENING);
                 choices.push(Choice {
                     arm,
                     grasp: Grasp {
@@ -419,11 +418,24 @@ impl Search {
             }
             if !self.choice_ready {
                 let p = self.points.as_ref().unwrap()[self.pi];
-                if self.failed_choices.contains(&self.ci)
-                    || !self.arm_may_reach_point(self.choices[self.ci].arm, p)
+                if self.failed_choices.contains(&self.ci) || !self.pick_feasible(self.ci) {
+                    self.ci += 1;
+                    continue;
+                }
+                if !self.arm_may_reach_point(self.choices[self.ci].arm, p)
                     || !self.choice_fits_point(self.ci)
-                    || !self.pick_feasible(self.ci)
                 {
+                    let what = if self.held {
+                        "the held grasp"
+                    } else {
+                        "a grasp"
+                    };
+                    self.reject(Stage::Gripper, || {
+                        format!(
+                            "no placement leaves {what} within the arm's reach with the gripper \
+                             free"
+                        )
+                    });
                     self.ci += 1;
                     continue;
                 }
@@ -1398,6 +1410,10 @@ impl Search {
             let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
                 Ok((p, _)) => p,
                 Err(e) => {
+                    if e == crate::rrt::RrtError::InvalidStart {
+                        // The start is this choice's whatever the tuple: drop the choice.
+                        self.failed_choices.insert(ci);
+                    }
                     self.reject(Stage::Trajectory, || {
                         format!("no collision-free trajectory to hand `{oname}` over: {e}")
                     });
@@ -1440,6 +1456,9 @@ impl Search {
         let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
             Ok((p, _)) => p,
             Err(e) => {
+                if e == crate::rrt::RrtError::InvalidStart {
+                    self.failed_choices.insert(ci);
+                }
                 self.reject(Stage::Trajectory, || {
                     format!("no collision-free trajectory carrying `{oname}`: {e}")
                 });
@@ -1792,9 +1811,17 @@ impl Search {
         };
         if self.points.is_none() {
             // Base poses around the target's footprint, facing it, nearest the current base
-            // first.
+            // first; but the robot's station (its base in the scene file) before them all:
+            // going back to a piece of furniture takes the robot back to where it works
+            // (m9's NAVTO(desk)). A station that does not reach the target is rejected below.
             let cur = self.world.agent_state(robot).base.translation;
-            self.points = Some(target.base_positions(cur));
+            let mut cands = target.base_positions(cur);
+            let [sx, sy, _] = self.world.agent(robot).spec.base;
+            let station = Vector::new(sx, sy, 0.0);
+            if (station - Vector::new(cur.x, cur.y, 0.0)).length() > 0.01 {
+                cands.insert(0, station);
+            }
+            self.points = Some(cands);
             self.pi = 0;
         }
         let rreach = self.world.agent(robot).reach;

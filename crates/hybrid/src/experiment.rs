@@ -186,6 +186,8 @@ impl Experiment {
 #[derive(Clone, Debug)]
 pub struct ExperimentOptions {
     pub runs: usize,
+    /// Only the run with this index (the others are skipped; seeds are unchanged).
+    pub only: Option<usize>,
     pub seed: u64,
     /// Keep the scene as it is (the paper's setting) instead of randomizing it per run.
     pub fixed: bool,
@@ -205,7 +207,11 @@ pub fn run_experiment(
 ) -> Experiment {
     let planner = Arc::new(Planner::new());
     let start = Instant::now();
-    let runs: Vec<RunRecord> = (0..options.runs)
+    let indices: Vec<usize> = match options.only {
+        Some(i) => vec![i],
+        None => (0..options.runs).collect(),
+    };
+    let runs: Vec<RunRecord> = indices
         .into_par_iter()
         .map(|i| {
             let seed = options.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);

@@ -71,6 +71,10 @@ pub struct LibraryArgs {
     /// Folder for the CSV and JSON results.
     #[arg(long, default_value = "htngtp-bench")]
     pub out: PathBuf,
+    /// Run only the run with this index (0-based; same scene and seeds as in the full
+    /// experiment), e.g. to retrace a failure with `HTNGTP_TRACE=1`.
+    #[arg(long, value_name = "INDEX")]
+    pub only: Option<usize>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
@@ -91,6 +95,13 @@ fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Strategy, &'static
 fn library(args: LibraryArgs) -> anyhow::Result<u8> {
     if args.runs == 0 {
         anyhow::bail!("--runs must be at least 1");
+    }
+    if let Some(i) = args.only.filter(|&i| i >= args.runs) {
+        anyhow::bail!(
+            "--only {i}: there are only {} runs (0..{})",
+            args.runs,
+            args.runs - 1
+        );
     }
     let dir = library_dir()?;
     let domain_path = args
@@ -118,7 +129,11 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut results = Vec::new();
     for (s, name) in strategies {
-        let bar = indicatif::ProgressBar::new(args.runs as u64);
+        let bar = indicatif::ProgressBar::new(if args.only.is_some() {
+            1
+        } else {
+            args.runs as u64
+        });
         bar.set_style(
             indicatif::ProgressStyle::with_template(
                 "{msg:>16} [{bar:40}] {pos}/{len} runs {elapsed}",
@@ -129,6 +144,7 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
         bar.set_message(name);
         let options = ExperimentOptions {
             runs: args.runs,
+            only: args.only,
             seed: args.seed,
             fixed: args.fixed,
             randomization: Randomization::default(),
