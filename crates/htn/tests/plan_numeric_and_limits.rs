@@ -139,3 +139,21 @@ fn the_search_is_deterministic_for_a_seed() {
     assert_eq!(a.outcome, b.outcome);
     assert_eq!(a.stats.nodes, b.stats.nodes);
 }
+
+#[test]
+fn the_loop_check_cuts_a_recursion_that_returned_to_the_same_state() {
+    // fix -> mark fix tidy -> mark fix tidy: the second mark changes nothing, so the innermost fix starts
+    // in the state of its parent fix and is cut; the parent then takes its next method (the
+    // second mark undone) and finishes: mark finish tidy. Comparing only the number of actions executed, the
+    // recursion would run to the length bound (about a thousand marks) before finishing.
+    let (d, p) = load("noop-loop-domain.hddl", "noop-loop.hddl");
+    let r = plan(&d, &p, &PlannerOptions::default(), None).unwrap();
+    let Outcome::Found { plan } = r.outcome else {
+        panic!("no plan: {:?}", r.outcome)
+    };
+    validate(&d, &p, &plan, &[]).unwrap();
+    let names: Vec<&str> = plan.actions.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["mark", "finish", "tidy"]);
+    assert!(r.stats.loops_pruned > 0);
+    assert_eq!(r.stats.depth_cutoffs, 0);
+}

@@ -6,8 +6,9 @@
 //! Methods are tried in domain order, bindings in the order the binder finds them.
 //!
 //! Against endless descent, three guards. A task is not decomposed while one of its ancestors
-//! decomposes the same ground task with no action executed in between (left recursion that
-//! made no progress; as HyperTensioN's "dejavu"). This may cut off plans in contrived domains,
+//! decomposes the same ground task in the same state: with no action executed in between (left
+//! recursion that made no progress; as HyperTensioN's "dejavu"), or with actions that only led
+//! back to that state (bookkeeping actions whose effects already held, say). This may cut off plans in contrived domains,
 //! so an exhausted search that used it is repeated without it before the problem is called
 //! unsolvable. Then, every node (state, remaining task network, geometric world) is
 //! fingerprinted and expanded at most once per search (a revisited node is either on the
@@ -136,7 +137,7 @@ pub struct SearchStats {
     pub geo_backtracks: u64,
     /// Nodes pruned because they were expanded before.
     pub revisits_pruned: u64,
-    /// Tasks pruned because an ancestor decomposes the same task with no action in between.
+    /// Tasks pruned because an ancestor decomposes the same task in the same state.
     pub loops_pruned: u64,
     /// Nodes pruned because the remaining tasks cannot achieve a false goal literal.
     pub goal_pruned: u64,

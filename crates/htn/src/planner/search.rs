@@ -17,6 +17,10 @@ use super::{
 
 const NIL: u32 = u32::MAX;
 
+/// How many ancestors the loop check compares states with (beyond, only ancestors with no
+/// action executed since count).
+const LOOP_WINDOW: usize = 32;
+
 /// An unknown argument in a partially ground task (only in goal-relevance reasoning).
 const WILD: u32 = u32::MAX;
 
@@ -104,6 +108,8 @@ struct TreeRec {
     parent: u32,
     /// Actions in the plan when this decomposition was made.
     steps: u32,
+    /// Fingerprint of the state (and geometric world) in which this decomposition was made.
+    state: u64,
 }
 
 #[derive(Clone, Copy)]
@@ -477,20 +483,39 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
-    /// Whether the same ground task is being decomposed by one of its own ancestors with no
-    /// action executed since (left recursion that made no progress: the state is the same, so
-    /// the inner occurrence can only repeat what the outer one may do).
+    /// Fingerprint of the current state and geometric world.
+    fn state_fingerprint(&self) -> u64 {
+        let world = self.oracle.as_deref().map_or(0, |o| o.world_fingerprint());
+        self.state.hash() ^ mix64(world ^ self.salt)
+    }
+
+    /// Whether the same ground task is being decomposed by one of its own ancestors in the
+    /// same state (recursion that made no progress: whatever was executed since, if anything,
+    /// led back to the state the outer occurrence started in, so the inner occurrence can only
+    /// repeat what the outer one may do). Ancestors with no action since are all looked at;
+    /// with actions since, only the nearest [`LOOP_WINDOW`] (the walk stays cheap in deep
+    /// decompositions, and seeing fewer repeats only prunes less).
     fn no_progress_repeat(&self, cell: Cell) -> bool {
         let steps = self.steps.len() as u32;
         let mut r = cell.parent;
+        let mut now = None;
+        let mut dist = 0;
         while r != NIL {
             let rec = &self.tree[r as usize];
-            if rec.steps != steps {
+            let same_steps = rec.steps == steps;
+            if !same_steps && dist >= LOOP_WINDOW {
                 return false;
             }
             if rec.task == cell.task {
-                return true;
+                if same_steps {
+                    return true;
+                }
+                let now = *now.get_or_insert_with(|| self.state_fingerprint());
+                if rec.state == now {
+                    return true;
+                }
             }
+            dist += 1;
             r = rec.parent;
         }
         false
@@ -708,8 +733,7 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
-        let world = self.oracle.as_deref().map_or(0, |o| o.world_fingerprint());
-        let h = self.state.hash() ^ mix64(world ^ self.salt);
+        let h = self.state_fingerprint();
         self.visited.insert(((h as u128) << 64) | net_hash as u128)
     }
 
@@ -1000,6 +1024,7 @@ impl<'a, 'o> Search<'a, 'o> {
             n,
             parent,
             steps: self.steps.len() as u32,
+            state: self.state_fingerprint(),
         });
         self.next_occ += n;
         let mut top_cell = rest;
