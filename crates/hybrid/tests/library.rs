@@ -261,3 +261,92 @@ fn same_seed_same_plan() {
         plan(&b).to_competition_format()
     );
 }
+
+fn backtracks(run: &Run) -> (u64, u64) {
+    (
+        run.result.stats.htn_backtracks,
+        run.result.stats.geo_backtracks,
+    )
+}
+
+/// Section III: a small cluttered desk with room to make one big book accessible, not both; a
+/// book made accessible also blocks showing the other. Geometric-first backtracking tries other
+/// placements of the first book, then HTN alternatives, and ends giving the first book directly
+/// (m4) and making the second accessible (m3), as the paper's Fig. 3 walks through.
+#[test]
+fn section_iii_cluttered_desk_backtracks_geometrically_then_symbolically() {
+    let r = run(
+        "domain-compound.hddl",
+        "cluttered-desk",
+        "cluttered-desk.toml",
+        Strategy::GeometricFirst { k: 3 },
+    );
+    let (htn, geo) = backtracks(&r);
+    assert!(htn > 0 && geo > 0, "HTN {htn}, GTP {geo} backtracks");
+    let m = methods(&r);
+    assert!(
+        m.contains(&"m3".to_string()) && m.contains(&"m4".to_string()),
+        "{m:?}"
+    );
+    let a = actions(&r);
+    assert_eq!(
+        a.iter().filter(|n| *n == "pickmakebkacc").count(),
+        1,
+        "{a:?}"
+    );
+    assert_eq!(a.iter().filter(|n| *n == "givebk").count(), 1, "{a:?}");
+    assert_literals_flow(&r);
+    assert_trajectories_recheck(&r);
+    // Chronological backtracking solves it too, revisiting geometric and HTN choices.
+    let c = run(
+        "domain-compound.hddl",
+        "cluttered-desk",
+        "cluttered-desk.toml",
+        Strategy::Chronological,
+    );
+    let (htn, geo) = backtracks(&c);
+    assert!(
+        htn > 0 && geo > 0,
+        "chronological: HTN {htn}, GTP {geo} backtracks"
+    );
+    assert_trajectories_recheck(&c);
+}
+
+/// Fig. 4: both books must end visible to the member before the POS machine may come
+/// (check-lent-visible). Geometric-first solves it by GTP backtracking alone (other placements
+/// of the grey book); symbolic backtracking cannot and changes method instead (m4 for the white
+/// book).
+#[test]
+fn fig4_is_solved_by_geometric_backtracking_alone() {
+    let r = run(
+        "domain-compound.hddl",
+        "fig4",
+        "scene.toml",
+        Strategy::GeometricFirst { k: 3 },
+    );
+    let (htn, geo) = backtracks(&r);
+    assert_eq!(htn, 0, "HTN backtracks");
+    assert!(geo > 0, "no GTP backtrack");
+    let a = actions(&r);
+    assert_eq!(
+        a.iter().filter(|n| *n == "pickmakebkacc").count(),
+        2,
+        "{a:?}"
+    );
+    let last = r.oracle.literals(r.final_world());
+    for b in ["grey-book", "white-book"] {
+        assert!(
+            last.contains(&GroundAtom::new("visible", &[b, "member"])),
+            "visible({b}, member)"
+        );
+    }
+    assert_trajectories_recheck(&r);
+    let s = run(
+        "domain-compound.hddl",
+        "fig4",
+        "scene.toml",
+        Strategy::Symbolic,
+    );
+    assert_eq!(backtracks(&s).1, 0);
+    assert!(methods(&s).contains(&"m4".to_string()));
+}
