@@ -462,6 +462,16 @@ impl<'a> ArmMotion<'a> {
         let mut full = self.template.clone();
         let mut waypoints = vec![from.to_vec()];
         let fine = params.resolution / params.certify_factor.max(1) as f32;
+        // The start too: it was checked, if at all, with the gripper otherwise opened (a
+        // retreat opens it at the placement) or against other obstacles.
+        set_arm_values(self.arm, &mut full, from);
+        *checks += 1;
+        if let Some(c) = checker.first_collision(&full) {
+            return Err(format!("at the start: {c}"));
+        }
+        if !extra(from) {
+            return Err("at the start, the gripper touches the object".into());
+        }
         for s in 1..=steps {
             let t = s as f32 / steps as f32;
             let target = Pose::from_parts(start.translation + offset * t, start.rotation);

@@ -221,12 +221,13 @@ pub fn edge_valid(
     checks: &mut usize,
 ) -> bool {
     let steps = (space.max_delta(a, b) / resolution).ceil().max(1.0) as usize;
-    check_steps(space, a, b, steps, 1, valid, checks)
+    check_steps(space, a, b, steps, 0, valid, checks)
 }
 
 /// Whether the edge `a -> b`, already found valid by [`edge_valid`] at `resolution`, stays
-/// valid `factor` times finer: only the configurations between those already checked are
-/// checked (a quarter fewer than a fresh check for a factor of 4).
+/// valid at `resolution / factor`: the configurations [`JointPath::densify`] gives at that
+/// resolution (so that a re-check of the path at it sees only checked configurations), less
+/// those the coarse check already covered.
 pub fn edge_refine(
     space: &JointSpace,
     a: &[f32],
@@ -236,19 +237,22 @@ pub fn edge_refine(
     valid: &mut impl FnMut(&[f32]) -> bool,
     checks: &mut usize,
 ) -> bool {
-    let coarse = (space.max_delta(a, b) / resolution).ceil().max(1.0) as usize;
-    let factor = factor.max(1) as usize;
-    check_steps(space, a, b, coarse * factor, factor, valid, checks)
+    let delta = space.max_delta(a, b);
+    let coarse = (delta / resolution).ceil().max(1.0) as usize;
+    let fine = (delta / (resolution / factor.max(1) as f32))
+        .ceil()
+        .max(1.0) as usize;
+    check_steps(space, a, b, fine, coarse, valid, checks)
 }
 
-/// Checks the configurations `k / steps` of the edge `a -> b`, `k` in `1..=steps`, except the
-/// multiples of `skip` (already checked) when `skip > 1`.
+/// Checks the configurations `k / steps` of the edge `a -> b`, `k` in `1..=steps`, except
+/// those that are also `j / done` (checked already) when `done > 0`.
 fn check_steps(
     space: &JointSpace,
     a: &[f32],
     b: &[f32],
     steps: usize,
-    skip: usize,
+    done: usize,
     valid: &mut impl FnMut(&[f32]) -> bool,
     checks: &mut usize,
 ) -> bool {
@@ -269,7 +273,7 @@ fn check_steps(
         stride = half;
     }
     for k in order {
-        if skip > 1 && k % skip == 0 {
+        if done > 0 && (k * done) % steps == 0 {
             continue;
         }
         space.interpolate(a, b, k as f32 / steps as f32, &mut q);

@@ -19,6 +19,8 @@ use htn::planner::{Outcome, PlanError, PlannerOptions, SearchStats, Strategy, pl
 use htn::validate::validate;
 
 const SLOTS: [&str; 2] = ["p1", "p2"];
+/// The desk with a line of sight (`hiding`): three slots; a book on `p1` hides one on `p2`.
+const SIGHT_SLOTS: [&str; 3] = ["p1", "p2", "p3"];
 
 /// A book placed on a slot.
 type Placement = (String, String);
@@ -34,6 +36,8 @@ struct Desk {
     solutions_given: usize,
     /// A crowded desk: any book on it blocks every further placement.
     crowded: bool,
+    /// Nothing blocks, but a book on `p1` hides a book on `p2` (shared literal `visible`).
+    hiding: bool,
 }
 
 impl GeometricOracle for Desk {
@@ -51,19 +55,33 @@ impl GeometricOracle for Desk {
         let (book, opened_in, pos) = self.streams.get_mut(&s.0).expect("an open stream");
         // Stack discipline: a stream is asked only in the world it was opened in.
         assert_eq!(*opened_in, self.world, "stream asked in another world");
-        let blocked = if self.crowded {
+        let blocked = if self.hiding {
+            false
+        } else if self.crowded {
             !self.world.is_empty()
         } else {
             self.world.iter().any(|(_, slot)| slot == "p1")
         };
-        while *pos < SLOTS.len() {
-            let slot = SLOTS[*pos];
+        let slots: &[&str] = if self.hiding { &SIGHT_SLOTS } else { &SLOTS };
+        let at = |slot: &str| self.world.iter().find(|(_, s)| s == slot).map(|(b, _)| b);
+        while *pos < slots.len() {
+            let slot = slots[*pos];
             *pos += 1;
-            if !blocked && !self.world.iter().any(|(_, s)| s == slot) {
+            if !blocked && at(slot).is_none() {
                 self.solutions_given += 1;
+                let mut add = vec![GroundAtom::new("on-desk", &[book])];
+                let mut delete = vec![];
+                if self.hiding {
+                    if slot != "p2" || at("p1").is_none() {
+                        add.push(GroundAtom::new("visible", &[book]));
+                    }
+                    if let (Some(other), "p1") = (at("p2"), slot) {
+                        delete.push(GroundAtom::new("visible", &[other]));
+                    }
+                }
                 return Ok(Some(GeoSolution {
-                    add: vec![GroundAtom::new("on-desk", &[book])],
-                    delete: vec![],
+                    add,
+                    delete,
                     payload: serde_json::json!({ "book": book, "slot": slot }),
                 }));
             }
@@ -96,7 +114,12 @@ impl GeometricOracle for Desk {
 
 fn load(problem: &str) -> (Domain, Problem) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/domains");
-    let d = htn::load_domain(dir.join("desk-domain.hddl")).unwrap();
+    let domain = if problem == "desk-visible.hddl" {
+        "desk-visible-domain.hddl"
+    } else {
+        "desk-domain.hddl"
+    };
+    let d = htn::load_domain(dir.join(domain)).unwrap();
     let p = htn::load_problem(dir.join(problem), &d).unwrap();
     (d, p)
 }
@@ -111,6 +134,7 @@ fn run_on(problem: &str, strategy: Strategy, crowded: bool) -> (Vec<String>, Sea
     let (d, p) = load(problem);
     let mut desk = Desk {
         crowded,
+        hiding: problem == "desk-visible.hddl",
         ..Desk::default()
     };
     let opts = PlannerOptions {
@@ -215,6 +239,21 @@ fn geometric_first_falls_back_to_htn_choices_when_no_repair_works() {
     assert_eq!((st.geo_repairs, st.geo_repairs_succeeded), (1, 0));
     assert_eq!(st.geo_backtracks, 1);
     assert_eq!(st.htn_backtracks, 1);
+}
+
+/// A method whose precondition reads shared literals fails because of a placement (the second
+/// book hidden behind the first, as in the paper's Fig. 4): geometric-first places the second
+/// book elsewhere, with no HTN backtrack; symbolic changes method (hands it over).
+#[test]
+fn a_shared_literal_precondition_failure_is_repaired_geometrically_first() {
+    let (s, st) = run("desk-visible.hddl", Strategy::GeometricFirst { k: 2 });
+    assert_eq!(s, ["makebkacc b1@p1", "makebkacc b2@p3", "tick m"]);
+    assert_eq!((st.htn_backtracks, st.geo_backtracks), (0, 1));
+    assert_eq!(st.geo_repairs_succeeded, 1);
+    let (s, st) = run("desk-visible.hddl", Strategy::Symbolic);
+    assert_eq!(s, ["makebkacc b1@p1", "givebk b2", "tick m"]);
+    assert_eq!(st.geo_backtracks, 0);
+    assert!(st.htn_backtracks > 0);
 }
 
 #[test]

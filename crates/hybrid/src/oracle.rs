@@ -309,8 +309,17 @@ impl GeometricOracle for GtpOracle {
         s.planner_calls += delta.planner_calls as u64;
         s.facts_time_s += t0.elapsed().as_secs_f64();
         if self.config.trace {
+            let lists = result
+                .as_ref()
+                .map(|r| {
+                    let show = |sign: char, atoms: &[GroundAtom]| -> String {
+                        atoms.iter().map(|a| format!(" {sign}{a}")).collect()
+                    };
+                    format!("{}{}", show('+', &r.add), show('-', &r.delete))
+                })
+                .unwrap_or_default();
             eprintln!(
-                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}",
+                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}{lists}",
                 args.join(", "),
                 if result.is_some() { "solution" } else { "none" },
                 delta.time_s * 1e3,

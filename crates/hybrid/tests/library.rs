@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use htn::oracle::GroundAtom;
+use htn::oracle::{GeometricOracle, GroundAtom};
 use htn::planner::{Outcome, PlannerOptions, Strategy};
 use hybrid::{Run, RunOptions, plan_files};
 
@@ -313,9 +313,9 @@ fn section_iii_cluttered_desk_backtracks_geometrically_then_symbolically() {
 }
 
 /// Fig. 4: both books must end visible to the member before the POS machine may come
-/// (check-lent-visible). Geometric-first solves it by GTP backtracking alone (other placements
-/// of the grey book); symbolic backtracking cannot and changes method instead (m4 for the white
-/// book).
+/// (check-lent-visible). The white book's first placement hides the grey one, so no method of
+/// PLACEPOSM applies; geometric-first places the white book differently (GTP backtracking
+/// alone), symbolic backtracking cannot and changes method instead (m4 for the white book).
 #[test]
 fn fig4_is_solved_by_geometric_backtracking_alone() {
     let r = run(
@@ -332,6 +332,51 @@ fn fig4_is_solved_by_geometric_backtracking_alone() {
         a.iter().filter(|n| *n == "pickmakebkacc").count(),
         2,
         "{a:?}"
+    );
+    // The white book's first placement, asked of the world the grey book's placement left
+    // (same seed and world, so the request the search made first), hides the grey book: its
+    // t- holds visible(grey-book, member).
+    let grey = plan(&r)
+        .actions
+        .iter()
+        .find(|a| a.name == "pickmakebkacc")
+        .unwrap();
+    let after_grey = r
+        .oracle
+        .solution_world(&grey.geometric.as_ref().unwrap().payload)
+        .unwrap()
+        .clone();
+    let names = [
+        "member",
+        "grey-book",
+        "white-book",
+        "pos-machine",
+        "pr2",
+        "desk",
+        "pos-stand",
+    ];
+    let mut o = hybrid::GtpOracle::new(
+        std::sync::Arc::new(gtp::planner::Planner::new()),
+        after_grey,
+        names.iter().map(|n| n.to_string()),
+        hybrid::OracleConfig::default(),
+    );
+    let stream = o
+        .open(
+            "pick-and-make-accessible",
+            &["white-book".into(), "member".into()],
+        )
+        .unwrap();
+    let first = o
+        .next_solution(stream)
+        .unwrap()
+        .expect("a placement of the white book");
+    assert!(
+        first
+            .delete
+            .contains(&GroundAtom::new("visible", &["grey-book", "member"])),
+        "the first placement keeps the grey book visible: -{:?}",
+        first.delete
     );
     let last = r.oracle.literals(r.final_world());
     for b in ["grey-book", "white-book"] {

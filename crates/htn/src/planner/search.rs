@@ -36,6 +36,18 @@ fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
 
 /// Adds to `m` the goal literals an action with arguments `args` (some may be `WILD`) may
 /// achieve.
+/// Whether `f` reads a shared predicate (a fact that geometry decides).
+fn reads_shared(c: &Compiled, f: &CFormula) -> bool {
+    match f {
+        CFormula::Atom(p, _) => c.shared_preds[*p as usize],
+        CFormula::Not(g) | CFormula::Forall(_, g) => reads_shared(c, g),
+        CFormula::And(v) | CFormula::Or(v) => v.iter().any(|g| reads_shared(c, g)),
+        CFormula::Imply(a, b) => reads_shared(c, a) || reads_shared(c, b),
+        CFormula::Exists(_, lits) => lits.iter().any(|l| reads_shared(c, &l.f)),
+        CFormula::True | CFormula::Eq(..) | CFormula::Compare(..) => false,
+    }
+}
+
 fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32], m: &mut [u64]) {
     for e in effs {
         match e {
@@ -890,6 +902,12 @@ impl<'a, 'o> Search<'a, 'o> {
         rest: u32,
         parent: u32,
     ) -> Result<bool, PlanError> {
+        if self.mode == Mode::Restore && self.forced.is_empty() && task != NIL {
+            // Back at a failure point of a repair with the original choices: fall back to HTN
+            // backtracking from here (see `expand_gs`).
+            self.end_repair();
+            return Ok(false);
+        }
         let marks = self.marks();
         self.frames.push(Frame {
             marks,
@@ -937,7 +955,39 @@ impl<'a, 'o> Search<'a, 'o> {
             self.apply_method(method, &binding);
             return Ok(true);
         }
-        self.next_alternative()
+        if self.next_alternative()? {
+            if self.mode == Mode::Retry && self.forced.is_empty() {
+                // The task that had no applicable method has one after the repair.
+                self.stats.geo_repairs_succeeded += 1;
+                self.end_repair();
+            }
+            return Ok(true);
+        }
+        // No method applies, and some method's precondition reads shared literals: the
+        // geometry made it fail (Fig. 4: a book placed so that it hides another). With
+        // geometric-first, other solutions of earlier geometric tasks come first, as on a
+        // failing GS action.
+        if self.mode == Mode::Normal
+            && task != NIL
+            && let Strategy::GeometricFirst { k } = self.opts.strategy
+            && k > 0
+            && self.methods_read_shared(task)
+        {
+            self.pop_frame();
+            return self.start_repair(k);
+        }
+        Ok(false)
+    }
+
+    /// Whether a precondition of some method of ground task `task` reads a shared predicate.
+    fn methods_read_shared(&self, task: u32) -> bool {
+        let c = self.c;
+        self.methods_of(task).iter().any(|&m| {
+            c.methods[m as usize]
+                .pre
+                .iter()
+                .any(|l| reads_shared(c, &l.f))
+        })
     }
 
     /// Tries the top frame's next alternative (the frame is restored).
