@@ -193,6 +193,8 @@ struct Repair {
     cands: Vec<usize>,
     pos: usize,
     tries_left: usize,
+    /// Tries spent on `cands[pos]`.
+    tries_here: usize,
     oldest: Option<usize>,
     orig: HashMap<usize, usize>,
 }
@@ -1338,6 +1340,7 @@ impl<'a, 'o> Search<'a, 'o> {
             cands,
             pos: 0,
             tries_left: k,
+            tries_here: 0,
             oldest: None,
             orig,
         });
@@ -1352,11 +1355,22 @@ impl<'a, 'o> Search<'a, 'o> {
         self.restore_top();
     }
 
+    /// The next try of a repair: another solution of an earlier geometric task, the latest
+    /// first, each task its share of the tries left (so that a budget of k reaches back k tasks
+    /// rather than spending it all on the latest one, as the paper's GTP backtracks "all the
+    /// way up to PICK(b1)"). Tasks are visited latest to earliest only: unwinding never has to
+    /// reach a frame a failed replay did not rebuild.
     fn next_repair_try(&mut self) -> Result<bool, PlanError> {
         loop {
             let r = self.repair.as_mut().expect("a repair in progress");
             if r.pos >= r.cands.len() || r.tries_left == 0 {
                 return self.restore_after_repair();
+            }
+            let share = r.tries_left.div_ceil(r.cands.len() - r.pos);
+            if r.tries_here >= share {
+                r.pos += 1;
+                r.tries_here = 0;
+                continue;
             }
             let g = r.cands[r.pos];
             r.oldest = Some(g);
@@ -1366,12 +1380,15 @@ impl<'a, 'o> Search<'a, 'o> {
             };
             let idx = gf.current + 1;
             if !self.fetch(g, idx)? {
-                self.repair.as_mut().expect("a repair").pos += 1;
+                let r = self.repair.as_mut().expect("a repair");
+                r.pos += 1;
+                r.tries_here = 0;
                 continue;
             }
             self.stats.geo_backtracks += 1;
             let r = self.repair.as_mut().expect("a repair");
             r.tries_left -= 1;
+            r.tries_here += 1;
             let forced: VecDeque<Key> = r.path[g + 1..].iter().cloned().collect();
             if let Kind::Geo(gf) = &mut self.frames[g].kind {
                 gf.current = idx;
