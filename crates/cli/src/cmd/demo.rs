@@ -17,7 +17,9 @@ use crate::cmd::geo::{Outputs, run_plan};
                   and puts it away afterwards), in the library scene of the paper's Fig. 4, with \
                   the variant of the domain used in the paper's experiment (PICK grouped with the \
                   GTP task that follows it) and geometric-first backtracking (other solutions of \
-                  earlier GTP tasks before HTN alternatives, the paper's Fig. 3). Prints \
+                  earlier GTP tasks before HTN alternatives, the paper's Fig. 3). As in Fig. 4, the \
+                  POS machine comes only when every lent book is in the member's view, and the \
+                  white book's first placement hides the grey one: the GTP places it again. Prints \
                   the decomposition tree, the plan with each GS action's geometric solution and the \
                   statistics; writes the plan JSON (for `htngtp view`) and pictures of the world \
                   after each GS action into the output folder."
@@ -57,13 +59,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     println!(
         "htngtp demo: {} + {} in {}\n",
         dir.join("domain-compound.hddl").display(),
-        dir.join("pay-by-card.hddl").display(),
+        dir.join("fig4.hddl").display(),
         dir.join("scene.toml").display()
     );
     let json_file = args.out.join("plan.json");
     let code = run_plan(
         &dir.join("domain-compound.hddl"),
-        &dir.join("pay-by-card.hddl"),
+        &dir.join("fig4.hddl"),
         &dir.join("scene.toml"),
         PlannerOptions {
             seed: args.seed,
