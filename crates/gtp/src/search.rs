@@ -1978,13 +1978,23 @@ fn visibility_upto(
     stop_above: Option<f32>,
 ) -> f32 {
     let done = |v: f32| stop_above.is_some_and(|m| v > m);
-    let mut v = visibility::visibility_for_agent(world, h, o, Aim::Current, resolution).fraction();
+    let mut v =
+        visibility::visibility_for_agent_upto(world, h, o, Aim::Current, resolution, stop_above)
+            .fraction();
     if done(v) {
         return v;
     }
     if level >= 1 {
         v = v.max(
-            visibility::visibility_for_agent(world, h, o, Aim::AtTarget, resolution).fraction(),
+            visibility::visibility_for_agent_upto(
+                world,
+                h,
+                o,
+                Aim::AtTarget,
+                resolution,
+                stop_above,
+            )
+            .fraction(),
         );
         if done(v) {
             return v;
@@ -1995,7 +2005,15 @@ fn visibility_upto(
             let mut w = world.clone();
             w.set_agent_config(h, st.base, &st.q);
             v = v.max(
-                visibility::visibility_for_agent(&w, h, o, Aim::AtTarget, resolution).fraction(),
+                visibility::visibility_for_agent_upto(
+                    &w,
+                    h,
+                    o,
+                    Aim::AtTarget,
+                    resolution,
+                    stop_above,
+                )
+                .fraction(),
             );
             if done(v) {
                 return v;
