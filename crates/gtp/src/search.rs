@@ -118,6 +118,8 @@ pub(crate) struct Search {
     /// Per (level, point, orientation) of a placing task: the visibility reached when the
     /// human-related constraints hold, `None` when they fail.
     verdicts: HashMap<(usize, usize, usize), Option<Option<f32>>>,
+    /// Placements whose cheap human-related checks passed, the full verdict not yet measured.
+    prechecked: HashSet<(usize, usize, usize)>,
     /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
     human_shoulders: HashMap<u8, Vec<Vector>>,
     deepest: Option<Stage>,
@@ -286,6 +288,7 @@ impl Search {
             failed_choices: HashSet::new(),
             pick_cache: HashMap::new(),
             verdicts: HashMap::new(),
+            prechecked: HashSet::new(),
             human_shoulders: HashMap::new(),
             deepest: None,
             rejections: HashMap::new(),
@@ -1230,18 +1233,10 @@ impl Search {
         let (Some(h), Some(o)) = (self.human, self.object) else {
             return 0.0;
         };
-        self.stats.visibility_checks += 1;
         let full = self.cfg.visibility_resolution;
         if let Some(max) = self.c.max_visibility {
-            // Hiding: one ray reaching the object unblocked already shows it, so a coarse
-            // grid proves most failures at a sixteenth of the cost; and the first view (head
-            // as it is, turned, other stances) that shows too much ends the measure.
-            if full > 8 {
-                let coarse = visibility_upto(world, h, o, level, 8, Some(max));
-                if coarse > max {
-                    return coarse;
-                }
-            }
+            // Hiding (the coarse grid already passed, in the precheck): the first view (head as
+            // it is, turned, other stances) that shows too much ends the measure.
             return visibility_upto(world, h, o, level, full, Some(max));
         }
         measure_visibility(world, h, o, level, full)
@@ -1359,41 +1354,118 @@ impl Search {
         } else {
             self.verdicts.get(&verdict_key).copied()
         };
+        // Placing, the verdict not yet known: its cheap part (reach, coarse visibility) now,
+        // once per placement; the full pixel measure after the straight moves below.
+        if !kind.hands_over() && cached.is_none() && !self.prechecked.contains(&verdict_key) {
+            if !self.placement_precheck(&after, level) {
+                self.verdicts.insert(verdict_key, None);
+                return None;
+            }
+            self.prechecked.insert(verdict_key);
+        }
+        // Placing: the straight moves at the placement (inverse kinematics along a line, a few
+        // checks: they fail often, the lift from the placement hitting what is above it), then
+        // the full pixel visibility, the costly test, then the planned motions.
+        let mut checks = 0;
+        let never = |_: &[f32]| true;
+        let placing = if kind.hands_over() {
+            None
+        } else {
+            // Place: straight down from above the placement.
+            let up = Vector::Z * self.c.lift;
+            let mut down = match held_wo.straight(
+                &qp,
+                up,
+                STRAIGHT_STEPS,
+                &rrt,
+                &never,
+                &mut rng,
+                &mut checks,
+            ) {
+                Ok(p) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free descent to place `{oname}`: {e}")
+                    });
+                    return None;
+                }
+            };
+            down.waypoints.reverse();
+            let q_above = down.waypoints[0].clone();
+            // Retreat: open, straight back along the gripper, the gripper checked against the
+            // object.
+            let open_wo = self
+                .motion(
+                    &setup,
+                    ch.arm,
+                    self.obstacles_wo.clone(),
+                    None,
+                    ch.grasp.opening,
+                )
+                .ok()?;
+            let shape = self.world.object(o).shape.clone();
+            let shape_pose = orient.pose * self.world.object(o).shape_offset;
+            let gripper = Gripper::new(ch.grasp.opening);
+            let straddle =
+                |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+            let back = tool.rotation * Vector::X * (-self.c.approach);
+            let retreat = match open_wo.straight(
+                &qp,
+                back,
+                STRAIGHT_STEPS,
+                &rrt,
+                &straddle,
+                &mut rng,
+                &mut checks,
+            ) {
+                Ok(p) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free retreat after placing `{oname}`: {e}")
+                    });
+                    return None;
+                }
+            };
+            let q_ret = retreat.waypoints.last().unwrap().clone();
+            Some((down, q_above, retreat, q_ret))
+        };
         let visibility = match cached {
             Some(Some(v)) => v,
             Some(None) => return None,
             None => {
-                let v = self.placement_verdict(&after, level);
-                if !kind.hands_over() {
+                let v = if kind.hands_over() {
+                    self.placement_verdict(&after, level)
+                } else {
+                    // The precheck passed: the full measure.
+                    let v = self.placement_visibility(&after, level);
                     self.verdicts.insert(verdict_key, v);
-                }
+                    v
+                };
                 v?
             }
         };
         // Trajectories.
-        if !self.held && !self.ensure_approach(ci) {
-            return None;
-        }
-        let pick = if self.held {
-            None
-        } else {
-            self.pick_cache.get(&ci).cloned().flatten()
-        };
-        let from = pick
-            .as_ref()
-            .map(|p| p.q_lift.clone())
-            .unwrap_or_else(|| q0.clone());
-        let mut checks = 0;
-        let never = |_: &[f32]| true;
-        let mut trajectories = match &pick {
-            Some(p) => self.pick_trajectories(ci, p),
-            None => Vec::new(),
-        };
-        let held_rec = Some(HeldRecord {
-            object: oname.clone(),
-            object_in_tool: object_in_tool.into(),
-        });
         if kind.hands_over() {
+            if !self.held && !self.ensure_approach(ci) {
+                return None;
+            }
+            let pick = if self.held {
+                None
+            } else {
+                self.pick_cache.get(&ci).cloned().flatten()
+            };
+            let from = pick
+                .as_ref()
+                .map(|p| p.q_lift.clone())
+                .unwrap_or_else(|| q0.clone());
+            let mut trajectories = match &pick {
+                Some(p) => self.pick_trajectories(ci, p),
+                None => Vec::new(),
+            };
+            let held_rec = Some(HeldRecord {
+                object: oname.clone(),
+                object_in_tool: object_in_tool.into(),
+            });
             self.stats.planner_calls += 1;
             let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
                 Ok((p, _)) => p,
@@ -1422,64 +1494,29 @@ impl Search {
                 trajectories,
             ));
         }
-        // Place: straight down from above the placement.
-        let up = Vector::Z * self.c.lift;
-        let mut down =
-            match held_wo.straight(&qp, up, STRAIGHT_STEPS, &rrt, &never, &mut rng, &mut checks) {
-                Ok(p) => p,
-                Err(e) => {
-                    self.reject(Stage::Trajectory, || {
-                        format!("no collision-free descent to place `{oname}`: {e}")
-                    });
-                    return None;
-                }
-            };
-        down.waypoints.reverse();
-        let q_above = down.waypoints[0].clone();
-        self.stats.planner_calls += 1;
-        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
-            Ok((p, _)) => p,
-            Err(e) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free trajectory carrying `{oname}`: {e}")
-                });
-                return None;
-            }
+        // The motions planned by RRT, the costly part, cheapest first: the pick's approach (once
+        // per grasp), the arm's return, then the transfer with the object held.
+        let (down, q_above, retreat, q_ret) = placing?;
+        if !self.held && !self.ensure_approach(ci) {
+            return None;
+        }
+        let pick = if self.held {
+            None
+        } else {
+            self.pick_cache.get(&ci).cloned().flatten()
         };
-        // Retreat: open, straight back along the gripper, the gripper checked against the object.
-        let open_wo = self
-            .motion(
-                &setup,
-                ch.arm,
-                self.obstacles_wo.clone(),
-                None,
-                ch.grasp.opening,
-            )
-            .ok()?;
-        let shape = self.world.object(o).shape.clone();
-        let shape_pose = orient.pose * self.world.object(o).shape_offset;
-        let gripper = Gripper::new(ch.grasp.opening);
-        let straddle =
-            |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
-        let back = tool.rotation * Vector::X * (-self.c.approach);
-        let retreat = match open_wo.straight(
-            &qp,
-            back,
-            STRAIGHT_STEPS,
-            &rrt,
-            &straddle,
-            &mut rng,
-            &mut checks,
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free retreat after placing `{oname}`: {e}")
-                });
-                return None;
-            }
+        let from = pick
+            .as_ref()
+            .map(|p| p.q_lift.clone())
+            .unwrap_or_else(|| q0.clone());
+        let mut trajectories = match &pick {
+            Some(p) => self.pick_trajectories(ci, p),
+            None => Vec::new(),
         };
-        let q_ret = retreat.waypoints.last().unwrap().clone();
+        let held_rec = Some(HeldRecord {
+            object: oname.clone(),
+            object_in_tool: object_in_tool.into(),
+        });
         // Return the arm to where it started, the object now an obstacle where it was placed.
         let obstacles_after = Arc::new(robot::near(
             &robot::obstacles(&after, robot, &[]),
@@ -1495,6 +1532,16 @@ impl Search {
             Err(e) => {
                 self.reject(Stage::Trajectory, || {
                     format!("no collision-free return of the arm after placing `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        self.stats.planner_calls += 1;
+        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
+            Ok((p, _)) => p,
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free trajectory carrying `{oname}`: {e}")
                 });
                 return None;
             }
@@ -1586,6 +1633,17 @@ impl Search {
     /// The human-related constraints on the world after a tuple: reach, then pixel visibility
     /// (the expensive test, last). `Some(visibility measured)` when they hold.
     fn placement_verdict(&mut self, after: &World, level: u8) -> Option<Option<f32>> {
+        if !self.placement_precheck(after, level) {
+            return None;
+        }
+        self.placement_visibility(after, level)
+    }
+
+    /// The cheap part of [`Search::placement_verdict`]: exact reach of the object by the human
+    /// and, for hiding, pixel visibility on a coarse grid (one ray reaching the object shows
+    /// it, so the coarse grid proves most failures at a sixteenth of the cost). `false` when a
+    /// constraint fails.
+    fn placement_precheck(&mut self, after: &World, level: u8) -> bool {
         let oname = self.object_name();
         let hname = self.human_name();
         // Exact reach of the object by the human in the final world (the shared literal's test).
@@ -1595,7 +1653,7 @@ impl Search {
             self.reject(Stage::Reach, || {
                 format!("no placement of `{oname}` is within {hname}'s reach")
             });
-            return None;
+            return false;
         }
         if let Some(k) = self.c.unreachable_within
             && self.human_reach_at_most(after, k)
@@ -1603,8 +1661,40 @@ impl Search {
             self.reject(Stage::Reach, || {
                 format!("every placement of `{oname}` is within {hname}'s reach")
             });
-            return None;
+            return false;
         }
+        if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
+            self.stats.visibility_checks += 1;
+        }
+        if let (Some(max), Some(h), Some(o)) = (self.c.max_visibility, self.human, self.object)
+            && self.cfg.visibility_resolution > 8
+        {
+            let v = visibility_upto(after, h, o, self.c.max_effort, 8, Some(max));
+            if v > max {
+                self.hidden_failed(v, max);
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Records a hiding place that shows too much.
+    fn hidden_failed(&mut self, v: f32, max: f32) {
+        let hname = self.human_name();
+        self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
+        let best = self.best_visibility.unwrap();
+        self.reject(Stage::Visibility, || {
+            format!(
+                "no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})"
+            )
+        });
+    }
+
+    /// The rest of [`Search::placement_verdict`] once the precheck passed: pixel visibility
+    /// at full resolution. `Some(visibility measured)` when it meets the thresholds.
+    fn placement_visibility(&mut self, after: &World, level: u8) -> Option<Option<f32>> {
+        let oname = self.object_name();
+        let hname = self.human_name();
         // Pixel visibility, the expensive test, last of the constraints.
         let mut visibility = None;
         if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
@@ -1628,11 +1718,7 @@ impl Search {
             if let Some(max) = self.c.max_visibility
                 && v > max
             {
-                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
-                let best = self.best_visibility.unwrap();
-                self.reject(Stage::Visibility, || {
-                    format!("no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})")
-                });
+                self.hidden_failed(v, max);
                 return None;
             }
         }
