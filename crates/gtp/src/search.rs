@@ -17,7 +17,7 @@ use geometry::visibility::{self, Aim};
 use geometry::world::World;
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::math::{Pose, Rotation, Vector};
-use parry3d::query::Ray;
+use parry3d::query::{Ray, RayCast};
 use parry3d::shape::{Cuboid, Shape};
 
 use crate::grasp::Grasp;
@@ -541,14 +541,21 @@ impl Search {
             return true;
         }
         let ray = Ray::new(from, dir / len);
-        let skip_human = self.human.map(|h| self.world.agent(h).name().to_string());
-        !self.full_wo.obstacles().iter().any(|o| {
-            if let Some(n) = &skip_human
-                && o.name.starts_with(&format!("{n}/"))
+        let skip_human = self
+            .human
+            .map(|h| format!("{}/", self.world.agent(h).name()));
+        let max = len - 0.005;
+        let obstacles = &self.full_wo;
+        !obstacles.obstacles().iter().enumerate().any(|(i, o)| {
+            if skip_human
+                .as_ref()
+                .is_some_and(|n| o.name.starts_with(n.as_str()))
             {
                 return false;
             }
-            o.shape.intersects_ray(&o.pose, &ray, len - 0.005)
+            // The obstacle's bounds first (a ray that misses them misses the shape).
+            obstacles.aabb(i).intersects_local_ray(&ray, max)
+                && o.shape.intersects_ray(&o.pose, &ray, max)
         })
     }
 
