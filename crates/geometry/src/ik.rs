@@ -253,7 +253,12 @@ fn normalise(v: f32, l: &crate::agent::JointLimits) -> f32 {
         l.clamp(v)
     } else {
         let two_pi = std::f32::consts::TAU;
-        let w = (v + std::f32::consts::PI).rem_euclid(two_pi) - std::f32::consts::PI;
+        let s = v + std::f32::consts::PI;
+        // Already in range (the common case): `rem_euclid` would return `s` itself.
+        if (0.0..two_pi).contains(&s) {
+            return s - std::f32::consts::PI;
+        }
+        let w = s.rem_euclid(two_pi) - std::f32::consts::PI;
         if w.is_finite() { w } else { 0.0 }
     }
 }
@@ -393,12 +398,19 @@ fn descend(
             checkpoint = err;
         }
         // (J J^T + lambda I) y = e; dq = J^T y.
+        // Symmetric: the upper triangle summed, mirrored (the same products in the same order).
         let mut a = [[0.0f64; 6]; 6];
         for col in &work.jac {
             for r in 0..6 {
-                for c in 0..6 {
+                for c in r..6 {
                     a[r][c] += col[r] * col[c];
                 }
+            }
+        }
+        #[allow(clippy::needless_range_loop)]
+        for r in 1..6 {
+            for c in 0..r {
+                a[r][c] = a[c][r];
             }
         }
         for (r, row) in a.iter_mut().enumerate() {
