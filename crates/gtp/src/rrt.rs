@@ -105,8 +105,15 @@ impl JointSpace {
 }
 
 /// An angle difference folded into `[-pi, pi)`.
+#[inline]
 fn wrap(a: f32) -> f32 {
-    (a + PI).rem_euclid(TAU) - PI
+    let s = a + PI;
+    // Already in range (the common case): `rem_euclid` would return `s` itself, at the cost
+    // of a floating-point remainder (the nearest-neighbour search calls this per node).
+    if (0.0..TAU).contains(&s) {
+        return s - PI;
+    }
+    s.rem_euclid(TAU) - PI
 }
 
 /// Limits and settings of one RRT-Connect query.
