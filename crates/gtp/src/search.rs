@@ -1056,6 +1056,14 @@ impl Search {
         let gripper = Gripper::new(ch.grasp.opening);
         let straddle =
             |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+        // The grasp configuration itself is the approach's start, which the straight move
+        // takes as checked: the open gripper there must not touch the object either.
+        if !straddle(&qg) {
+            self.reject(Stage::Pick, || {
+                format!("the open gripper touches `{oname}` at every grasp configuration")
+            });
+            return None;
+        }
         let mut checks = 0;
         let back_path = match open_wo.straight(
             &qg,
