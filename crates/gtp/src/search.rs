@@ -1304,6 +1304,26 @@ impl Search {
             });
             return None;
         }
+        // For a placement, the world after the task does not depend on the grasp (the arm
+        // returns to where it was): the cheap part of the human-related verdict (reach, coarse
+        // visibility), once per placement, comes before the inverse kinematics; the full pixel
+        // measure after the straight moves below.
+        let robot = self.setup.agent;
+        let base = self.world.agent_state(robot).base;
+        let arm = self.setup.arms[ch.arm].clone();
+        let cached = if kind.hands_over() {
+            None
+        } else {
+            self.verdicts.get(&verdict_key).copied()
+        };
+        if !kind.hands_over() && cached.is_none() && !self.prechecked.contains(&verdict_key) {
+            let after = self.placed_world(o, orient.pose);
+            if !self.placement_precheck(&after, level) {
+                self.verdicts.insert(verdict_key, None);
+                return None;
+            }
+            self.prechecked.insert(verdict_key);
+        }
         let held_wo = self
             .motion(
                 &setup,
@@ -1350,34 +1370,17 @@ impl Search {
             }
         };
         // The world after the task, for the visibility test.
-        let robot = self.setup.agent;
-        let base = self.world.agent_state(robot).base;
-        let arm = self.setup.arms[ch.arm].clone();
-        let mut after = self.world.clone();
-        if kind.hands_over() {
+        let after = if kind.hands_over() {
+            let mut after = self.world.clone();
             let mut q = self.q0_full.clone();
             robot::set_arm_values(&arm, &mut q, &qp);
             set_opening(&self.setup.model, &arm, &mut q, ch.grasp.width);
             after.set_agent_config(robot, base, &q);
             after.attach_with_grasp(o, robot, arm.tool_link, object_in_tool);
+            after
         } else {
-            after.set_agent_config(robot, base, &self.q0_full);
-            after.set_object_pose(o, orient.pose);
-        }
-        let cached = if kind.hands_over() {
-            None
-        } else {
-            self.verdicts.get(&verdict_key).copied()
+            self.placed_world(o, orient.pose)
         };
-        // Placing, the verdict not yet known: its cheap part (reach, coarse visibility) now,
-        // once per placement; the full pixel measure after the straight moves below.
-        if !kind.hands_over() && cached.is_none() && !self.prechecked.contains(&verdict_key) {
-            if !self.placement_precheck(&after, level) {
-                self.verdicts.insert(verdict_key, None);
-                return None;
-            }
-            self.prechecked.insert(verdict_key);
-        }
         // Placing: the straight moves at the placement (inverse kinematics along a line, a few
         // checks: they fail often, the lift from the placement hitting what is above it), then
         // the full pixel visibility, the costly test, then the planned motions.
@@ -1605,6 +1608,16 @@ impl Search {
             level,
             trajectories,
         ))
+    }
+
+    /// The world after a placement: object `o` at `pose`, the robot in its starting posture.
+    fn placed_world(&self, o: ObjectId, pose: Pose) -> World {
+        let mut after = self.world.clone();
+        let robot = self.setup.agent;
+        let base = after.agent_state(robot).base;
+        after.set_agent_config(robot, base, &self.q0_full);
+        after.set_object_pose(o, pose);
+        after
     }
 
     /// For placing tasks: whether some orientation at the current point meets the human-related
