@@ -253,7 +253,12 @@ fn normalise(v: f32, l: &crate::agent::JointLimits) -> f32 {
         l.clamp(v)
     } else {
         let two_pi = std::f32::consts::TAU;
-        let w = (v + std::f32::consts::PI).rem_euclid(two_pi) - std::f32::consts::PI;
+        let s = v + std::f32::consts::PI;
+        // Already in range (the common case): `rem_euclid` would return `s` itself.
+        if (0.0..two_pi).contains(&s) {
+            return s - std::f32::consts::PI;
+        }
+        let w = s.rem_euclid(two_pi) - std::f32::consts::PI;
         if w.is_finite() { w } else { 0.0 }
     }
 }
@@ -262,6 +267,8 @@ fn normalise(v: f32, l: &crate::agent::JointLimits) -> f32 {
 struct Work {
     /// Jacobian, 6 rows by n columns, column-major.
     jac: Vec<[f64; 6]>,
+    /// The Jacobian at the trial configuration (becomes `jac` when the step is taken).
+    trial_jac: Vec<[f64; 6]>,
     trial: Vec<f32>,
 }
 
@@ -269,6 +276,7 @@ impl Work {
     fn new(n: usize) -> Work {
         Work {
             jac: vec![[0.0; 6]; n],
+            trial_jac: vec![[0.0; 6]; n],
             trial: vec![0.0; n],
         }
     }
@@ -390,12 +398,19 @@ fn descend(
             checkpoint = err;
         }
         // (J J^T + lambda I) y = e; dq = J^T y.
+        // Symmetric: the upper triangle summed, mirrored (the same products in the same order).
         let mut a = [[0.0f64; 6]; 6];
         for col in &work.jac {
             for r in 0..6 {
-                for c in 0..6 {
+                for c in r..6 {
                     a[r][c] += col[r] * col[c];
                 }
+            }
+        }
+        #[allow(clippy::needless_range_loop)]
+        for r in 1..6 {
+            for c in 0..r {
+                a[r][c] = a[c][r];
             }
         }
         for (r, row) in a.iter_mut().enumerate() {
@@ -420,15 +435,22 @@ fn descend(
         for k in 0..x.len() {
             work.trial[k] = normalise(x[k] + work.trial[k] * scale, &limits[k]);
         }
-        let (e2, _, _) = evaluate(joints, goal, &work.trial, options.orientation, None);
+        // The trial's Jacobian comes with its forward kinematics (a few cross products more):
+        // a step taken, the most common outcome, then needs no second evaluation.
+        let (e2, pe2, oe2) = evaluate(
+            joints,
+            goal,
+            &work.trial,
+            options.orientation,
+            Some(&mut work.trial_jac),
+        );
         let err2 = sq(&e2);
         if err2 < err {
             x.copy_from_slice(&work.trial);
-            let (e3, pe3, oe3) =
-                evaluate(joints, goal, x, options.orientation, Some(&mut work.jac));
-            e = e3;
-            pe = pe3;
-            oe = oe3;
+            std::mem::swap(&mut work.jac, &mut work.trial_jac);
+            e = e2;
+            pe = pe2;
+            oe = oe2;
             err = err2;
             lambda = (lambda * 0.3).max(1e-9);
         } else {

@@ -17,9 +17,10 @@
 //! hidden about 0.5. Only the target and the bodies whose bounds meet the eye-to-target region
 //! are tested; nothing else of the scene is touched.
 
-use parry3d::bounding_volume::BoundingVolume;
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
 use parry3d::query::{Ray, RayCast};
+use parry3d::shape::Shape;
 
 use crate::effort::aim_head;
 use crate::render::look_rotation;
@@ -70,6 +71,22 @@ pub fn visibility_from(
     fov: [f32; 2],
     resolution: usize,
 ) -> Visibility {
+    visibility_from_upto(world, target, eye, fov, resolution, None)
+}
+
+/// [`visibility_from`], stopping as soon as the fraction is certain to exceed `stop_above`
+/// (more rays shown than `stop_above` x resolution², whatever the ideal count): both counts
+/// are then partial, and the fraction they give exceeds `stop_above` but is not the full
+/// measure (enough to reject a hiding place). With `None`, or when the fraction stays at or
+/// below `stop_above`, the result is exactly [`visibility_from`]'s.
+pub fn visibility_from_upto(
+    world: &World,
+    target: ObjectId,
+    eye: &Pose,
+    fov: [f32; 2],
+    resolution: usize,
+    stop_above: Option<f32>,
+) -> Visibility {
     let res = resolution.max(1);
     let obj = world.object(target);
     let tpose = world.object_shape_pose(target);
@@ -99,20 +116,59 @@ pub fn visibility_from(
     }
 
     // Possible occluders: bodies whose bounds meet the region spanned by the eye and the
-    // target, except the target itself and any body the eye is inside of.
+    // target, except the target itself and any body the eye is inside of. A compound body
+    // (furniture) is split into its parts, each kept only if its own bounds meet the region:
+    // a ray then stops at the first part it hits instead of searching the compound for its
+    // nearest hit. The segment from the eye to the target lies inside the region, so nothing
+    // outside it can block a ray.
     let mut region = taabb;
     region.take_point(e);
     let bodies = world.bodies();
-    let occluders: Vec<_> = bodies
-        .iter()
-        .filter(|b| b.owner != BodyOwner::Object(target))
-        .map(|b| (b, b.shape.compute_aabb(&b.pose)))
-        .filter(|(b, bb)| bb.intersects(&region) && !b.shape.contains_point(&b.pose, e))
-        .collect();
+    let mut occluders: Vec<Occluder<'_>> = Vec::new();
+    for b in &bodies {
+        if b.owner == BodyOwner::Object(target) {
+            continue;
+        }
+        let bb = b.shape.compute_aabb(&b.pose);
+        if !bb.intersects(&region) || b.shape.contains_point(&b.pose, e) {
+            continue;
+        }
+        match b.shape.as_compound() {
+            Some(c) => {
+                for (part_pose, part) in c.shapes() {
+                    let pb = part.compute_aabb(&(b.pose * *part_pose)).loosened(1e-4);
+                    if pb.intersects(&region) {
+                        occluders.push(Occluder {
+                            aabb: pb,
+                            pose: b.pose,
+                            part: Some(*part_pose),
+                            shape: &**part,
+                        });
+                    }
+                }
+            }
+            None => occluders.push(Occluder {
+                aabb: bb,
+                pose: b.pose,
+                part: None,
+                shape: &**b.shape,
+            }),
+        }
+    }
 
+    // A ray counts when it hits the target, lies inside the field of view and no occluder
+    // cuts it first. Neighbouring rays are mostly cut by the same body: the last one that
+    // blocked is tried first (the verdict of each ray does not depend on the order of the
+    // tests).
     let inv_eye = eye.rotation.inverse();
     let (tx, ty) = ((0.5 * fov[0]).tan(), (0.5 * fov[1]).tan());
+    // With an early stop: shown rays beyond which the fraction exceeds `stop_above` whatever
+    // the ideal count (at most res x res).
+    let enough = stop_above
+        .filter(|m| *m < 1.0)
+        .map(|m| (m.max(0.0) * (res * res) as f32).floor() as u32 + 1);
     let mut vis = Visibility { shown: 0, ideal: 0 };
+    let mut last = 0usize;
     for j in 0..res {
         let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
         for i in 0..res {
@@ -127,15 +183,55 @@ pub fn visibility_from(
             if d.x <= 0.0 || (d.y / d.x).abs() > tx || (d.z / d.x).abs() > ty {
                 continue;
             }
-            let blocked = occluders.iter().any(|(b, bb)| {
-                bb.intersects_local_ray(&ray, toi) && b.shape.intersects_ray(&b.pose, &ray, toi)
-            });
+            let blocked = occluders.get(last).is_some_and(|o| o.blocks(&ray, toi))
+                || occluders.iter().enumerate().any(|(k, o)| {
+                    let hit = k != last && o.blocks(&ray, toi);
+                    if hit {
+                        last = k;
+                    }
+                    hit
+                });
             if !blocked {
                 vis.shown += 1;
+                if enough.is_some_and(|n| vis.shown >= n) {
+                    return vis;
+                }
             }
         }
     }
     vis
+}
+
+/// A body, or one part of a compound body, that may cut rays.
+struct Occluder<'a> {
+    /// World bounds (of the part).
+    aabb: Aabb,
+    /// The body's world pose.
+    pose: Pose,
+    /// The part's pose in the body's frame, for a part of a compound.
+    part: Option<Pose>,
+    shape: &'a dyn Shape,
+}
+
+impl Occluder<'_> {
+    /// Whether it cuts `ray` before `toi` (a part is tested in the compound's frame and counted
+    /// as the compound itself counts its parts).
+    fn blocks(&self, ray: &Ray, toi: f32) -> bool {
+        if !self.aabb.intersects_local_ray(ray, toi) {
+            return false;
+        }
+        match &self.part {
+            Some(part) => {
+                // As the compound counts a hit: strictly before `toi` (a part flush with the
+                // target's face does not hide it).
+                let local = ray.inverse_transform_by(&self.pose);
+                self.shape
+                    .cast_ray(part, &local, toi, true)
+                    .is_some_and(|t| t < toi)
+            }
+            None => self.shape.intersects_ray(&self.pose, ray, toi),
+        }
+    }
 }
 
 /// Visibility of `target` for an agent as it stands now, with the head as it is ([`Aim::Current`]),
@@ -146,6 +242,18 @@ pub fn visibility_for_agent(
     target: ObjectId,
     aim: Aim,
     resolution: usize,
+) -> Visibility {
+    visibility_for_agent_upto(world, agent, target, aim, resolution, None)
+}
+
+/// [`visibility_for_agent`] with [`visibility_from_upto`]'s early stop above `stop_above`.
+pub fn visibility_for_agent_upto(
+    world: &World,
+    agent: AgentId,
+    target: ObjectId,
+    aim: Aim,
+    resolution: usize,
+    stop_above: Option<f32>,
 ) -> Visibility {
     let st = world.agent_state(agent);
     let eye = match aim {
@@ -167,5 +275,12 @@ pub fn visibility_for_agent(
             info.model.link_pose_by_id(st.base, &q, info.eye_link)
         }
     };
-    visibility_from(world, target, &eye, world.agent(agent).fov, resolution)
+    visibility_from_upto(
+        world,
+        target,
+        &eye,
+        world.agent(agent).fov,
+        resolution,
+        stop_above,
+    )
 }

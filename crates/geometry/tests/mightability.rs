@@ -96,11 +96,15 @@ fn library_maps_agree_with_the_exact_facts_on_the_books() {
             m.object_level(&w, member, b, false).is_none_or(|l| l >= 3),
             "{book}"
         );
-        // The maps are optimistic about visibility (a cell counts when any ray reaches it);
-        // the member still needs at least a lean to glimpse the books behind the screens.
+        // The maps are optimistic about visibility (a cell counts when any ray reaches it):
+        // never a higher level than the exact pixel measure's (the top of the big white book
+        // shows over the screens to rays, though not half its pixels).
+        let exact = geometry::facts::visible_effort(&w, member, b, &Default::default());
+        let mapped = m.object_level(&w, member, b, true);
+        assert!(exact.is_some_and(|e| e >= 3), "{book}: exact {exact:?}");
         assert!(
-            m.object_level(&w, member, b, true).is_none_or(|l| l >= 2),
-            "{book}"
+            mapped.is_some_and(|l| exact.is_some_and(|e| l <= e)),
+            "{book}: maps {mapped:?}, exact {exact:?}"
         );
     }
 }

@@ -173,3 +173,125 @@ fn head_angles_decide_what_is_in_view() {
     );
     assert!(away.fraction() < 0.1, "{away:?}");
 }
+
+/// The measure as first written: whole bodies as occluders (a compound tested as one shape),
+/// every ray cast, no early stop. The optimised measure must give the same counts.
+fn reference(
+    w: &World,
+    target: geometry::scene::ObjectId,
+    eye: &Pose,
+    fov: [f32; 2],
+    res: usize,
+) -> (u32, u32) {
+    use geometry::world::BodyOwner;
+    use parry3d::bounding_volume::BoundingVolume;
+    use parry3d::query::Ray;
+    let obj = w.object(target);
+    let tpose = w.object_shape_pose(target);
+    let e = eye.translation;
+    let taabb = obj.shape.compute_aabb(&tpose);
+    let rot = look_rotation(taabb.center() - e);
+    let lb = obj.shape.compute_local_aabb();
+    let (mut a0, mut a1, mut b0, mut b1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    for k in 0..8 {
+        let c = Vector::new(
+            if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
+            if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
+            if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
+        );
+        let l = rot.inverse() * (tpose.transform_point(c) - e);
+        let x = l.x.max(1e-3);
+        let (a, b) = ((l.y / x).clamp(-6.0, 6.0), (l.z / x).clamp(-6.0, 6.0));
+        a0 = a0.min(a);
+        a1 = a1.max(a);
+        b0 = b0.min(b);
+        b1 = b1.max(b);
+    }
+    let mut region = taabb;
+    region.take_point(e);
+    let bodies = w.bodies();
+    let occluders: Vec<_> = bodies
+        .iter()
+        .filter(|b| b.owner != BodyOwner::Object(target))
+        .filter(|b| {
+            b.shape.compute_aabb(&b.pose).intersects(&region) && !b.shape.contains_point(&b.pose, e)
+        })
+        .collect();
+    let inv_eye = eye.rotation.inverse();
+    let (tx, ty) = ((0.5 * fov[0]).tan(), (0.5 * fov[1]).tan());
+    let (mut shown, mut ideal) = (0, 0);
+    for j in 0..res {
+        let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
+        for i in 0..res {
+            let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
+            let dir = rot * Vector::new(1.0, a, b);
+            let ray = Ray::new(e, dir);
+            let Some(toi) = obj.shape.cast_ray(&tpose, &ray, f32::MAX, true) else {
+                continue;
+            };
+            ideal += 1;
+            let d = inv_eye * dir;
+            if d.x <= 0.0 || (d.y / d.x).abs() > tx || (d.z / d.x).abs() > ty {
+                continue;
+            }
+            if !occluders
+                .iter()
+                .any(|b| b.shape.intersects_ray(&b.pose, &ray, toi))
+            {
+                shown += 1;
+            }
+        }
+    }
+    (shown, ideal)
+}
+
+#[test]
+fn the_optimised_measure_counts_as_the_reference_and_stops_only_when_it_may() {
+    use geometry::visibility::visibility_from_upto;
+    let mut w = World::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../domains/library/scene.toml"
+    ))
+    .unwrap();
+    let member = w.agent_id("member").unwrap();
+    let fov = w.agent(member).fov;
+    let eye = w.eye_pose(member);
+    let (mut partly, mut hidden, mut full, mut n) = (0, 0, 0, 0);
+    for name in ["pos-machine", "grey-book"] {
+        let o = w.object_id(name).unwrap();
+        let start = w.object_pose(o);
+        // A grid over the scene's furniture: in the shelf, behind the monitor, on the desk.
+        for i in 0..24 {
+            for j in 0..24 {
+                for z in [0.1f32, 0.5, 0.8, 0.9, 1.3] {
+                    let p = Vector::new(-1.3 + 0.08 * i as f32, -1.2 + 0.1 * j as f32, z);
+                    w.set_object_pose(o, Pose::from_parts(p, start.rotation));
+                    let (shown, ideal) = reference(&w, o, &eye, fov, 16);
+                    let v = visibility_from(&w, o, &eye, fov, 16);
+                    assert_eq!((v.shown, v.ideal), (shown, ideal), "{name} at {p:?}");
+                    let f = v.fraction();
+                    for m in [0.0f32, 0.25, 0.9] {
+                        let u = visibility_from_upto(&w, o, &eye, fov, 16, Some(m));
+                        assert_eq!(u.fraction() > m, f > m, "{name} at {p:?}, stop above {m}");
+                        if f <= m {
+                            assert_eq!(u, v, "{name} at {p:?}: no early stop below {m}");
+                        }
+                    }
+                    n += 1;
+                    if shown == 0 && ideal > 0 {
+                        hidden += 1;
+                    } else if shown == ideal {
+                        full += 1;
+                    } else {
+                        partly += 1;
+                    }
+                }
+            }
+        }
+    }
+    // The sample holds every kind of case.
+    assert!(
+        hidden > 50 && partly > 50 && full > 50,
+        "{n}: {hidden} hidden, {partly} partly, {full} full"
+    );
+}

@@ -105,8 +105,15 @@ impl JointSpace {
 }
 
 /// An angle difference folded into `[-pi, pi)`.
+#[inline]
 fn wrap(a: f32) -> f32 {
-    (a + PI).rem_euclid(TAU) - PI
+    let s = a + PI;
+    // Already in range (the common case): `rem_euclid` would return `s` itself, at the cost
+    // of a floating-point remainder (the nearest-neighbour search calls this per node).
+    if (0.0..TAU).contains(&s) {
+        return s - PI;
+    }
+    s.rem_euclid(TAU) - PI
 }
 
 /// Limits and settings of one RRT-Connect query.
@@ -122,8 +129,9 @@ pub struct RrtParams {
     pub time_limit: Duration,
     /// Shortcut attempts on the path found.
     pub shortcut_iterations: usize,
-    /// Shortcuts and the final path are checked at `resolution / certify_factor`, so that the
-    /// path returned stays valid when re-checked that much finer (1: no certification).
+    /// The final path is checked at `resolution / certify_factor`, on the configurations that
+    /// [`JointPath::densify`] gives at that resolution, so that the path returned stays valid
+    /// when re-checked that much finer (1: no certification).
     pub certify_factor: u32,
 }
 
@@ -432,12 +440,11 @@ pub fn plan(
         &mut valid,
         &mut stats.checks,
     ) && (params.certify_factor <= 1
-        || edge_refine(
+        || edge_valid(
             space,
             start,
             goal,
-            params.resolution,
-            params.certify_factor,
+            params.resolution / params.certify_factor as f32,
             &mut valid,
             &mut stats.checks,
         ))
@@ -483,19 +490,14 @@ pub fn plan(
                 shortcut(space, &mut path, params, &mut valid, rng, &mut stats.checks);
                 if params.certify_factor > 1 {
                     // Every edge of the path was checked at the search resolution (tree
-                    // edges, shortcuts): only the configurations in between remain.
+                    // edges, shortcuts); now at the finer one, on the very configurations a
+                    // re-check at that resolution visits ([`JointPath::densify`]): the steps of
+                    // the coarse grid refined by the factor need not be those.
+                    let fine = params.resolution / params.certify_factor as f32;
                     let mut certify = |p: &JointPath, checks: &mut usize| {
-                        p.waypoints.windows(2).all(|w| {
-                            edge_refine(
-                                space,
-                                &w[0],
-                                &w[1],
-                                params.resolution,
-                                params.certify_factor,
-                                &mut valid,
-                                checks,
-                            )
-                        })
+                        p.waypoints
+                            .windows(2)
+                            .all(|w| edge_valid(space, &w[0], &w[1], fine, &mut valid, checks))
                     };
                     if !certify(&path, &mut stats.checks) {
                         // A shortcut cut a corner between the coarse checks: fall back to the
@@ -629,6 +631,46 @@ mod tests {
             "{} waypoints",
             path.waypoints.len()
         );
+    }
+
+    #[test]
+    fn a_certified_path_passes_a_recheck_at_the_finer_resolution() {
+        // Slabs thinner than the fine resolution: checks on one grid may step over a slab that
+        // a check on another grid hits. The path returned must pass the re-check that the
+        // certification promises (every configuration `densify` gives at the finer resolution).
+        let slab = |q: &[f32]| {
+            [0.3f32, 0.5, 0.7]
+                .iter()
+                .any(|x| (q[0] - x).abs() < 0.001 && q[1] < 0.4)
+        };
+        let valid = |q: &[f32]| !slab(q);
+        let space = JointSpace::new(&[(0.0, 1.0, false), (0.0, 1.0, false)]);
+        let params = RrtParams {
+            resolution: 0.01,
+            max_step: 0.3,
+            ..RrtParams::default()
+        };
+        let (mut found, mut certified_out) = (0, 0);
+        for seed in 0..200 {
+            let mut rng = fastrand::Rng::with_seed(seed);
+            match plan(&space, &[0.1, 0.1], &[0.9, 0.1], valid, &params, &mut rng) {
+                Ok((path, _)) => {
+                    found += 1;
+                    if let Some(q) = path
+                        .densify(&space, params.resolution / params.certify_factor as f32)
+                        .into_iter()
+                        .find(|q| slab(q))
+                    {
+                        panic!("seed {seed}: the certified path crosses a slab at {q:?}");
+                    }
+                }
+                Err((RrtError::Certification(_), _)) => certified_out += 1,
+                Err((e, _)) => panic!("seed {seed}: {e}"),
+            }
+        }
+        // Some queries find a path around the slabs; the others are refused by the
+        // certification (their coarse edges cross a slab).
+        assert!(found > 0, "{found} paths, {certified_out} refused");
     }
 
     #[test]

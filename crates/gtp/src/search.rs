@@ -17,7 +17,7 @@ use geometry::visibility::{self, Aim};
 use geometry::world::World;
 use parry3d::bounding_volume::BoundingVolume;
 use parry3d::math::{Pose, Rotation, Vector};
-use parry3d::query::Ray;
+use parry3d::query::{Ray, RayCast};
 use parry3d::shape::{Cuboid, Shape};
 
 use crate::grasp::Grasp;
@@ -118,6 +118,8 @@ pub(crate) struct Search {
     /// Per (level, point, orientation) of a placing task: the visibility reached when the
     /// human-related constraints hold, `None` when they fail.
     verdicts: HashMap<(usize, usize, usize), Option<Option<f32>>>,
+    /// Placements whose cheap human-related checks passed, the full verdict not yet measured.
+    prechecked: HashSet<(usize, usize, usize)>,
     /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
     human_shoulders: HashMap<u8, Vec<Vector>>,
     deepest: Option<Stage>,
@@ -285,6 +287,7 @@ impl Search {
             failed_choices: HashSet::new(),
             pick_cache: HashMap::new(),
             verdicts: HashMap::new(),
+            prechecked: HashSet::new(),
             human_shoulders: HashMap::new(),
             deepest: None,
             rejections: HashMap::new(),
@@ -454,6 +457,14 @@ impl Search {
             self.stats.orientations += 1;
             let point = self.points.as_ref().unwrap()[self.pi];
             if let Some(sol) = self.try_tuple(self.ci, point, orient, oidx) {
+                // The next solution at another point: another grasp or turn of the object at
+                // the same spot would mostly repeat this one's effect on the world (what it
+                // hides, what it blocks), which is what a request for another solution wants
+                // to change.
+                if self.task.kind != TaskKind::Pick {
+                    self.pi += 1;
+                    self.orientations = None;
+                }
                 return Some(sol);
             }
         }
@@ -550,14 +561,21 @@ impl Search {
             return true;
         }
         let ray = Ray::new(from, dir / len);
-        let skip_human = self.human.map(|h| self.world.agent(h).name().to_string());
-        !self.full_wo.obstacles().iter().any(|o| {
-            if let Some(n) = &skip_human
-                && o.name.starts_with(&format!("{n}/"))
+        let skip_human = self
+            .human
+            .map(|h| format!("{}/", self.world.agent(h).name()));
+        let max = len - 0.005;
+        let obstacles = &self.full_wo;
+        !obstacles.obstacles().iter().enumerate().any(|(i, o)| {
+            if skip_human
+                .as_ref()
+                .is_some_and(|n| o.name.starts_with(n.as_str()))
             {
                 return false;
             }
-            o.shape.intersects_ray(&o.pose, &ray, len - 0.005)
+            // The obstacle's bounds first (a ray that misses them misses the shape).
+            obstacles.aabb(i).intersects_local_ray(&ray, max)
+                && o.shape.intersects_ray(&o.pose, &ray, max)
         })
     }
 
@@ -1058,6 +1076,14 @@ impl Search {
         let gripper = Gripper::new(ch.grasp.opening);
         let straddle =
             |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+        // The grasp configuration itself is the approach's start, which the straight move
+        // takes as checked: the open gripper there must not touch the object either.
+        if !straddle(&qg) {
+            self.reject(Stage::Pick, || {
+                format!("the open gripper touches `{oname}` at every grasp configuration")
+            });
+            return None;
+        }
         let mut checks = 0;
         let back_path = match open_wo.straight(
             &qg,
@@ -1242,18 +1268,10 @@ impl Search {
         let (Some(h), Some(o)) = (self.human, self.object) else {
             return 0.0;
         };
-        self.stats.visibility_checks += 1;
         let full = self.cfg.visibility_resolution;
         if let Some(max) = self.c.max_visibility {
-            // Hiding: one ray reaching the object unblocked already shows it, so a coarse
-            // grid proves most failures at a sixteenth of the cost; and the first view (head
-            // as it is, turned, other stances) that shows too much ends the measure.
-            if full > 8 {
-                let coarse = visibility_upto(world, h, o, level, 8, Some(max));
-                if coarse > max {
-                    return coarse;
-                }
-            }
+            // Hiding (the coarse grid already passed, in the precheck): the first view (head as
+            // it is, turned, other stances) that shows too much ends the measure.
             return visibility_upto(world, h, o, level, full, Some(max));
         }
         measure_visibility(world, h, o, level, full)
@@ -1306,6 +1324,26 @@ impl Search {
             });
             return None;
         }
+        // For a placement, the world after the task does not depend on the grasp (the arm
+        // returns to where it was): the cheap part of the human-related verdict (reach, coarse
+        // visibility), once per placement, comes before the inverse kinematics; the full pixel
+        // measure after the straight moves below.
+        let robot = self.setup.agent;
+        let base = self.world.agent_state(robot).base;
+        let arm = self.setup.arms[ch.arm].clone();
+        let cached = if kind.hands_over() {
+            None
+        } else {
+            self.verdicts.get(&verdict_key).copied()
+        };
+        if !kind.hands_over() && cached.is_none() && !self.prechecked.contains(&verdict_key) {
+            let after = self.placed_world(o, orient.pose);
+            if !self.placement_precheck(&after, level) {
+                self.verdicts.insert(verdict_key, None);
+                return None;
+            }
+            self.prechecked.insert(verdict_key);
+        }
         let held_wo = self
             .motion(
                 &setup,
@@ -1352,60 +1390,120 @@ impl Search {
             }
         };
         // The world after the task, for the visibility test.
-        let robot = self.setup.agent;
-        let base = self.world.agent_state(robot).base;
-        let arm = self.setup.arms[ch.arm].clone();
-        let mut after = self.world.clone();
-        if kind.hands_over() {
+        let after = if kind.hands_over() {
+            let mut after = self.world.clone();
             let mut q = self.q0_full.clone();
             robot::set_arm_values(&arm, &mut q, &qp);
             set_opening(&self.setup.model, &arm, &mut q, ch.grasp.width);
             after.set_agent_config(robot, base, &q);
             after.attach_with_grasp(o, robot, arm.tool_link, object_in_tool);
+            after
         } else {
-            after.set_agent_config(robot, base, &self.q0_full);
-            after.set_object_pose(o, orient.pose);
-        }
-        let cached = if kind.hands_over() {
+            self.placed_world(o, orient.pose)
+        };
+        // Placing: the straight moves at the placement (inverse kinematics along a line, a few
+        // checks: they fail often, the lift from the placement hitting what is above it), then
+        // the full pixel visibility, the costly test, then the planned motions.
+        let mut checks = 0;
+        let never = |_: &[f32]| true;
+        let placing = if kind.hands_over() {
             None
         } else {
-            self.verdicts.get(&verdict_key).copied()
+            // Place: straight down from above the placement.
+            let up = Vector::Z * self.c.lift;
+            let mut down = match held_wo.straight(
+                &qp,
+                up,
+                STRAIGHT_STEPS,
+                &rrt,
+                &never,
+                &mut rng,
+                &mut checks,
+            ) {
+                Ok(p) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free descent to place `{oname}`: {e}")
+                    });
+                    return None;
+                }
+            };
+            down.waypoints.reverse();
+            let q_above = down.waypoints[0].clone();
+            // Retreat: open, straight back along the gripper, the gripper checked against the
+            // object.
+            let open_wo = self
+                .motion(
+                    &setup,
+                    ch.arm,
+                    self.obstacles_wo.clone(),
+                    None,
+                    ch.grasp.opening,
+                )
+                .ok()?;
+            let shape = self.world.object(o).shape.clone();
+            let shape_pose = orient.pose * self.world.object(o).shape_offset;
+            let gripper = Gripper::new(ch.grasp.opening);
+            let straddle =
+                |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+            let back = tool.rotation * Vector::X * (-self.c.approach);
+            let retreat = match open_wo.straight(
+                &qp,
+                back,
+                STRAIGHT_STEPS,
+                &rrt,
+                &straddle,
+                &mut rng,
+                &mut checks,
+            ) {
+                Ok(p) => p,
+                Err(e) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free retreat after placing `{oname}`: {e}")
+                    });
+                    return None;
+                }
+            };
+            let q_ret = retreat.waypoints.last().unwrap().clone();
+            Some((down, q_above, retreat, q_ret))
         };
         let visibility = match cached {
             Some(Some(v)) => v,
             Some(None) => return None,
             None => {
-                let v = self.placement_verdict(&after, level);
-                if !kind.hands_over() {
+                let v = if kind.hands_over() {
+                    self.placement_verdict(&after, level)
+                } else {
+                    // The precheck passed: the full measure.
+                    let v = self.placement_visibility(&after, level);
                     self.verdicts.insert(verdict_key, v);
-                }
+                    v
+                };
                 v?
             }
         };
         // Trajectories.
-        if !self.held && !self.ensure_approach(ci) {
-            return None;
-        }
-        let pick = if self.held {
-            None
-        } else {
-            self.pick_cache.get(&ci).cloned().flatten()
-        };
-        let from = pick
-            .as_ref()
-            .map(|p| p.q_lift.clone())
-            .unwrap_or_else(|| q0.clone());
-        let mut checks = 0;
-        let never = |_: &[f32]| true;
-        let mut trajectories = match &pick {
-            Some(p) => self.pick_trajectories(ci, p),
-            None => Vec::new(),
-        };
-        let held_rec = Some(HeldRecord {
-            object: oname.clone(),
-            object_in_tool: object_in_tool.into(),
-        });
         if kind.hands_over() {
+            if !self.held && !self.ensure_approach(ci) {
+                return None;
+            }
+            let pick = if self.held {
+                None
+            } else {
+                self.pick_cache.get(&ci).cloned().flatten()
+            };
+            let from = pick
+                .as_ref()
+                .map(|p| p.q_lift.clone())
+                .unwrap_or_else(|| q0.clone());
+            let mut trajectories = match &pick {
+                Some(p) => self.pick_trajectories(ci, p),
+                None => Vec::new(),
+            };
+            let held_rec = Some(HeldRecord {
+                object: oname.clone(),
+                object_in_tool: object_in_tool.into(),
+            });
             self.stats.planner_calls += 1;
             let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
                 Ok((p, _)) => p,
@@ -1438,67 +1536,29 @@ impl Search {
                 trajectories,
             ));
         }
-        // Place: straight down from above the placement.
-        let up = Vector::Z * self.c.lift;
-        let mut down =
-            match held_wo.straight(&qp, up, STRAIGHT_STEPS, &rrt, &never, &mut rng, &mut checks) {
-                Ok(p) => p,
-                Err(e) => {
-                    self.reject(Stage::Trajectory, || {
-                        format!("no collision-free descent to place `{oname}`: {e}")
-                    });
-                    return None;
-                }
-            };
-        down.waypoints.reverse();
-        let q_above = down.waypoints[0].clone();
-        self.stats.planner_calls += 1;
-        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
-            Ok((p, _)) => p,
-            Err(e) => {
-                if e == crate::rrt::RrtError::InvalidStart {
-                    self.failed_choices.insert(ci);
-                }
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free trajectory carrying `{oname}`: {e}")
-                });
-                return None;
-            }
+        // The motions planned by RRT, the costly part, cheapest first: the pick's approach (once
+        // per grasp), the arm's return, then the transfer with the object held.
+        let (down, q_above, retreat, q_ret) = placing?;
+        if !self.held && !self.ensure_approach(ci) {
+            return None;
+        }
+        let pick = if self.held {
+            None
+        } else {
+            self.pick_cache.get(&ci).cloned().flatten()
         };
-        // Retreat: open, straight back along the gripper, the gripper checked against the object.
-        let open_wo = self
-            .motion(
-                &setup,
-                ch.arm,
-                self.obstacles_wo.clone(),
-                None,
-                ch.grasp.opening,
-            )
-            .ok()?;
-        let shape = self.world.object(o).shape.clone();
-        let shape_pose = orient.pose * self.world.object(o).shape_offset;
-        let gripper = Gripper::new(ch.grasp.opening);
-        let straddle =
-            |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
-        let back = tool.rotation * Vector::X * (-self.c.approach);
-        let retreat = match open_wo.straight(
-            &qp,
-            back,
-            STRAIGHT_STEPS,
-            &rrt,
-            &straddle,
-            &mut rng,
-            &mut checks,
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free retreat after placing `{oname}`: {e}")
-                });
-                return None;
-            }
+        let from = pick
+            .as_ref()
+            .map(|p| p.q_lift.clone())
+            .unwrap_or_else(|| q0.clone());
+        let mut trajectories = match &pick {
+            Some(p) => self.pick_trajectories(ci, p),
+            None => Vec::new(),
         };
-        let q_ret = retreat.waypoints.last().unwrap().clone();
+        let held_rec = Some(HeldRecord {
+            object: oname.clone(),
+            object_in_tool: object_in_tool.into(),
+        });
         // Return the arm to where it started, the object now an obstacle where it was placed.
         let obstacles_after = Arc::new(robot::near(
             &robot::obstacles(&after, robot, &[]),
@@ -1514,6 +1574,19 @@ impl Search {
             Err(e) => {
                 self.reject(Stage::Trajectory, || {
                     format!("no collision-free return of the arm after placing `{oname}`: {e}")
+                });
+                return None;
+            }
+        };
+        self.stats.planner_calls += 1;
+        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
+            Ok((p, _)) => p,
+            Err(e) => {
+                if e == crate::rrt::RrtError::InvalidStart {
+                    self.failed_choices.insert(ci);
+                }
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free trajectory carrying `{oname}`: {e}")
                 });
                 return None;
             }
@@ -1564,6 +1637,16 @@ impl Search {
         ))
     }
 
+    /// The world after a placement: object `o` at `pose`, the robot in its starting posture.
+    fn placed_world(&self, o: ObjectId, pose: Pose) -> World {
+        let mut after = self.world.clone();
+        let robot = self.setup.agent;
+        let base = after.agent_state(robot).base;
+        after.set_agent_config(robot, base, &self.q0_full);
+        after.set_object_pose(o, pose);
+        after
+    }
+
     /// For placing tasks: whether some orientation at the current point meets the human-related
     /// constraints (reach, visibility). Those do not depend on the grasp (the arm returns to
     /// where it started), so they are measured once per orientation, before any grasp is tried
@@ -1605,6 +1688,17 @@ impl Search {
     /// The human-related constraints on the world after a tuple: reach, then pixel visibility
     /// (the expensive test, last). `Some(visibility measured)` when they hold.
     fn placement_verdict(&mut self, after: &World, level: u8) -> Option<Option<f32>> {
+        if !self.placement_precheck(after, level) {
+            return None;
+        }
+        self.placement_visibility(after, level)
+    }
+
+    /// The cheap part of [`Search::placement_verdict`]: exact reach of the object by the human
+    /// and, for hiding, pixel visibility on a coarse grid (one ray reaching the object shows
+    /// it, so the coarse grid proves most failures at a sixteenth of the cost). `false` when a
+    /// constraint fails.
+    fn placement_precheck(&mut self, after: &World, level: u8) -> bool {
         let oname = self.object_name();
         let hname = self.human_name();
         // Exact reach of the object by the human in the final world (the shared literal's test).
@@ -1614,7 +1708,7 @@ impl Search {
             self.reject(Stage::Reach, || {
                 format!("no placement of `{oname}` is within {hname}'s reach")
             });
-            return None;
+            return false;
         }
         if let Some(k) = self.c.unreachable_within
             && self.human_reach_at_most(after, k)
@@ -1622,8 +1716,40 @@ impl Search {
             self.reject(Stage::Reach, || {
                 format!("every placement of `{oname}` is within {hname}'s reach")
             });
-            return None;
+            return false;
         }
+        if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
+            self.stats.visibility_checks += 1;
+        }
+        if let (Some(max), Some(h), Some(o)) = (self.c.max_visibility, self.human, self.object)
+            && self.cfg.visibility_resolution > 8
+        {
+            let v = visibility_upto(after, h, o, self.c.max_effort, 8, Some(max));
+            if v > max {
+                self.hidden_failed(v, max);
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Records a hiding place that shows too much.
+    fn hidden_failed(&mut self, v: f32, max: f32) {
+        let hname = self.human_name();
+        self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
+        let best = self.best_visibility.unwrap();
+        self.reject(Stage::Visibility, || {
+            format!(
+                "no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})"
+            )
+        });
+    }
+
+    /// The rest of [`Search::placement_verdict`] once the precheck passed: pixel visibility
+    /// at full resolution. `Some(visibility measured)` when it meets the thresholds.
+    fn placement_visibility(&mut self, after: &World, level: u8) -> Option<Option<f32>> {
+        let oname = self.object_name();
+        let hname = self.human_name();
         // Pixel visibility, the expensive test, last of the constraints.
         let mut visibility = None;
         if self.c.min_visibility.is_some() || self.c.max_visibility.is_some() {
@@ -1647,11 +1773,7 @@ impl Search {
             if let Some(max) = self.c.max_visibility
                 && v > max
             {
-                self.best_visibility = Some(self.best_visibility.map_or(v, |b| b.min(v)));
-                let best = self.best_visibility.unwrap();
-                self.reject(Stage::Visibility, || {
-                    format!("no placement hidden from {hname}: best visibility {best:.2} (needs <= {max:.2})")
-                });
+                self.hidden_failed(v, max);
                 return None;
             }
         }
@@ -2005,13 +2127,23 @@ fn visibility_upto(
     stop_above: Option<f32>,
 ) -> f32 {
     let done = |v: f32| stop_above.is_some_and(|m| v > m);
-    let mut v = visibility::visibility_for_agent(world, h, o, Aim::Current, resolution).fraction();
+    let mut v =
+        visibility::visibility_for_agent_upto(world, h, o, Aim::Current, resolution, stop_above)
+            .fraction();
     if done(v) {
         return v;
     }
     if level >= 1 {
         v = v.max(
-            visibility::visibility_for_agent(world, h, o, Aim::AtTarget, resolution).fraction(),
+            visibility::visibility_for_agent_upto(
+                world,
+                h,
+                o,
+                Aim::AtTarget,
+                resolution,
+                stop_above,
+            )
+            .fraction(),
         );
         if done(v) {
             return v;
@@ -2022,7 +2154,15 @@ fn visibility_upto(
             let mut w = world.clone();
             w.set_agent_config(h, st.base, &st.q);
             v = v.max(
-                visibility::visibility_for_agent(&w, h, o, Aim::AtTarget, resolution).fraction(),
+                visibility::visibility_for_agent_upto(
+                    &w,
+                    h,
+                    o,
+                    Aim::AtTarget,
+                    resolution,
+                    stop_above,
+                )
+                .fraction(),
             );
             if done(v) {
                 return v;
