@@ -344,6 +344,11 @@ impl State {
             .map_or(f64::NAN, |id| self.values[id as usize])
     }
 
+    /// The fluent values by fluent id (NaN: undefined).
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
     /// Sets fluent `id` to `v`, recording the change.
     pub fn set_value(&mut self, id: u32, v: f64) {
         let old = self.values[id as usize];
