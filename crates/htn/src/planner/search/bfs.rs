@@ -234,13 +234,25 @@ impl<'a, 'o> Search<'a, 'o> {
             };
             self.state.set_value(i as u32, v);
         }
+        self.canonical_order();
         self.state.commit();
+    }
+
+    /// Puts the true facts in key order: bindings then come in an order that depends on the
+    /// state alone, not on the path (nor on how far the depth-first search went before).
+    fn canonical_order(&mut self) {
+        for p in 0..self.c.preds.len() as u32 {
+            if !self.state.is_static(p) {
+                self.state.sort_facts_of(p);
+            }
+        }
     }
 
     /// The greedy best-first search, until a plan, exhaustion or a limit of the options.
     pub(super) fn best_first(&mut self) -> Stop {
         let c = self.c;
         self.reset();
+        self.canonical_order();
         self.state.commit();
         self.stats.best_first = true;
         let (wg, wh) = (G_WEIGHT, H_WEIGHT);
@@ -345,6 +357,7 @@ impl<'a, 'o> Search<'a, 'o> {
                     continue;
                 }
                 self.effects.apply(&mut self.state);
+                self.canonical_order();
                 self.state.commit();
                 let key = self.snapshot();
                 let sid2 = intern_state(&mut states, key);
