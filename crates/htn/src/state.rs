@@ -344,6 +344,22 @@ impl State {
             .map_or(f64::NAN, |id| self.values[id as usize])
     }
 
+    /// Sorts the true facts of `pred` by their keys, so that the order the binder meets them
+    /// in does not depend on the history of adds and deletes.
+    pub fn sort_facts_of(&mut self, pred: u32) {
+        let mut list = std::mem::take(&mut self.by_pred[pred as usize]);
+        list.sort_unstable_by(|&a, &b| self.facts.key(a).cmp(self.facts.key(b)));
+        for (i, &f) in list.iter().enumerate() {
+            self.pos[f as usize] = i as u32;
+        }
+        self.by_pred[pred as usize] = list;
+    }
+
+    /// The fluent values by fluent id (NaN: undefined).
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
     /// Sets fluent `id` to `v`, recording the change.
     pub fn set_value(&mut self, id: u32, v: f64) {
         let old = self.values[id as usize];

@@ -27,6 +27,12 @@
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
 //!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
 //!   achiever (a parameterless action) must be achieved while that literal is false.
+//!
+//! Fallback: with a time limit, on a purely symbolic problem, the depth-first search gets the
+//! first `1 - best_first_share` of the time; if it has found no plan by then, a weighted
+//! best-first progression search (`search/bfs.rs`, as pandaPI's) takes the rest. It finds the
+//! plans of learned domains (Freecell) that amount to a blind state-space search, where the
+//! domain-order depth-first search gets lost in abstract descent.
 
 mod compile;
 mod eval;
@@ -98,6 +104,15 @@ pub struct PlannerOptions {
     pub duplicate_detection: bool,
     /// Prune tasks decomposed again by an ancestor with no progress (see the module docs).
     pub loop_check: bool,
+    /// The share of the time limit left to the best-first fallback search (see the module
+    /// docs): the depth-first search hands over when it has used the rest without finding a
+    /// plan. 0 turns the fallback off; without a time limit there is none.
+    #[serde(default = "default_best_first_share")]
+    pub best_first_share: f64,
+}
+
+fn default_best_first_share() -> f64 {
+    0.8
 }
 
 impl Default for PlannerOptions {
@@ -109,6 +124,7 @@ impl Default for PlannerOptions {
             initial_depth_bound: 1024,
             duplicate_detection: true,
             loop_check: true,
+            best_first_share: default_best_first_share(),
         }
     }
 }
@@ -150,6 +166,12 @@ pub struct SearchStats {
     /// Geometric-first repairs attempted and those that succeeded.
     pub geo_repairs: u64,
     pub geo_repairs_succeeded: u64,
+    /// Whether the best-first fallback search ran, and the nodes it expanded (counted in
+    /// `nodes` too).
+    #[serde(default)]
+    pub best_first: bool,
+    #[serde(default)]
+    pub best_first_nodes: u64,
     /// Wall-clock time of the search, in seconds.
     pub time_s: f64,
     /// Peak resident memory of the process seen during the search, in KiB (0 if unknown).

@@ -15,6 +15,8 @@ use super::{
     Limit, Outcome, PlanError, PlannerOptions, SearchResult, SearchStats, Strategy, current_rss_kb,
 };
 
+mod bfs;
+
 const NIL: u32 = u32::MAX;
 
 /// How many ancestors the loop check compares states with (beyond, only ancestors with no
@@ -201,6 +203,8 @@ struct Repair {
 
 enum Stop {
     Found,
+    /// The depth-first search used its share of the time: the best-first search takes over.
+    Switch,
     Exhausted,
     Limit(Limit),
 }
@@ -234,6 +238,8 @@ pub(crate) struct Search<'a, 'o> {
     masks: MaskTable,
     /// Per task, the id of its lifted goal mask.
     lifted_masks: Vec<u32>,
+    /// When (since the start) the depth-first search hands over to the best-first search.
+    switch_at: Option<std::time::Duration>,
 }
 
 /// Interned bitsets over the goal literals, with memoised unions (cells share them).
@@ -350,6 +356,7 @@ impl<'a, 'o> Search<'a, 'o> {
             may_memo: Vec::new(),
             masks,
             lifted_masks,
+            switch_at: fallback_time(c, opts),
         })
     }
 
@@ -367,6 +374,17 @@ impl<'a, 'o> Search<'a, 'o> {
                     };
                 }
                 Stop::Limit(l) => break Outcome::LimitReached { limit: l },
+                Stop::Switch => {
+                    self.switch_at = None;
+                    break match self.best_first() {
+                        Stop::Found => Outcome::Found {
+                            plan: self.build_plan(),
+                        },
+                        Stop::Limit(l) => Outcome::LimitReached { limit: l },
+                        // Every node reachable was generated (only sound pruning).
+                        Stop::Exhausted | Stop::Switch => Outcome::Unsolvable,
+                    };
+                }
                 Stop::Exhausted => {
                     if self.loop_check && self.stats.loops_pruned > loops_before {
                         // The left-recursion check may have cut off the only plans: search
@@ -452,6 +470,12 @@ impl<'a, 'o> Search<'a, 'o> {
         loop {
             if let Some(l) = self.check_limits() {
                 return Ok(Stop::Limit(l));
+            }
+            if self.stats.nodes % 256 == 0
+                && let Some(t) = self.switch_at
+                && self.start.elapsed() >= t
+            {
+                return Ok(Stop::Switch);
             }
             if self.top == NIL {
                 if self.goal_holds() {
@@ -851,6 +875,11 @@ impl<'a, 'o> Search<'a, 'o> {
 
     /// All bindings of method `m`'s parameters for ground task `task`, flat.
     fn bindings(&self, m: u32, task: u32) -> (Vec<u32>, usize) {
+        self.bindings_upto(m, task, usize::MAX)
+    }
+
+    /// The first `max` bindings of method `m`'s parameters for ground task `task`, flat.
+    fn bindings_upto(&self, m: u32, task: u32, max: usize) -> (Vec<u32>, usize) {
         let c = self.c;
         let method = &c.methods[m as usize];
         let mut b = vec![UNBOUND; method.slot_types.len()];
@@ -892,7 +921,7 @@ impl<'a, 'o> Search<'a, 'o> {
         ev.solve(&method.pre, &mut b, need, &mut |bb| {
             out.extend_from_slice(&bb[..n]);
             count += 1;
-            false
+            count >= max
         });
         (out, count)
     }
@@ -1467,6 +1496,20 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         plan
     }
+}
+
+/// When the depth-first search hands over to the best-first one: after its share of the time
+/// limit, on purely symbolic problems, when the fallback is on.
+fn fallback_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::time::Duration> {
+    let t = opts.limits.time?;
+    if opts.best_first_share <= 0.0
+        || opts.best_first_share > 1.0
+        || opts.best_first_share.is_nan()
+        || c.actions.iter().any(|a| a.evaluable.is_some())
+    {
+        return None;
+    }
+    Some(t.mul_f64(1.0 - opts.best_first_share))
 }
 
 /// The fact key of a shared literal given by name.

@@ -1,0 +1,551 @@
+//! The fallback search: greedy best-first progression over search nodes (state, task
+//! network), as in pandaPI's progression search. A node's successors are those of its first
+//! task: the action applied, or every method and binding that applies. Each (state, network)
+//! pair is generated once (duplicate detection). The heuristic is the network's least number
+//! of actions ignoring states: the sum over its tasks of the fewest actions any decomposition
+//! of the task may end with (a task with no decomposition at all makes the node a dead end).
+//! Ties go to the newest node, so a plateau is searched depth first.
+//!
+//! It runs only on purely symbolic problems (no geometric back end) and only when the
+//! depth-first search used its share of the time limit: there it finds plans the domain-order
+//! search gets lost before (learned domains that amount to a blind state-space search).
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::collections::HashSet;
+use std::hash::BuildHasherDefault;
+
+use crate::state::{FxHasher, FxMap};
+
+use super::super::compile::{CTerm, Compiled};
+use super::super::current_rss_kb;
+use super::super::eval::{Eval, UNBOUND};
+use super::{NIL, Search, Step, Stop, TreeRec};
+
+/// An unreachable cost.
+pub(super) const INF: u32 = u32::MAX / 4;
+
+/// Per task, the fewest actions any decomposition may end with, states ignored (`INF` if the
+/// task has no decomposition into actions).
+pub(super) fn min_costs(c: &Compiled) -> Vec<u32> {
+    let mut cost: Vec<u32> = c
+        .tasks
+        .iter()
+        .map(|t| if t.action.is_some() { 1 } else { INF })
+        .collect();
+    loop {
+        let mut changed = false;
+        for t in 0..c.tasks.len() {
+            if c.tasks[t].action.is_some() {
+                continue;
+            }
+            for &m in &c.tasks[t].methods {
+                let sum = c.methods[m as usize]
+                    .subtasks
+                    .iter()
+                    .fold(0u32, |s, (st, _)| (s + cost[*st as usize]).min(INF));
+                if sum < cost[t] {
+                    cost[t] = sum;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            return cost;
+        }
+    }
+}
+
+/// What led from a node's parent to it.
+#[derive(Clone, Copy)]
+enum Op {
+    /// The initial task network (under a binding of the problem's parameters).
+    Root {
+        first: u32,
+        n: u32,
+    },
+    Action {
+        occ: u32,
+        task: u32,
+    },
+    Method {
+        occ: u32,
+        task: u32,
+        method: u32,
+        first: u32,
+        n: u32,
+    },
+}
+
+struct Node {
+    parent: u32,
+    state: u32,
+    /// The network's top cell, or `NIL` when empty.
+    tn: u32,
+    next_occ: u32,
+    /// Actions on the path to the node.
+    g: u32,
+    op: Op,
+}
+
+/// Interned states: the true facts of changing predicates (sorted), then fluent values.
+#[derive(Default)]
+struct States {
+    list: Vec<Box<[u32]>>,
+    ids: FxMap<Box<[u32]>, u32>,
+}
+
+/// The priority of a node is `G_WEIGHT * actions so far + H_WEIGHT * estimate` (weighted A*
+/// over actions: abstract steps cost nothing).
+const G_WEIGHT: u32 = 1;
+const H_WEIGHT: u32 = 3;
+/// How many levels of decomposition the heuristic looks at in the current state.
+const LOOKAHEAD: u8 = 2;
+/// How many bindings of a method the heuristic looks at.
+const LOOK_BINDINGS: usize = 4;
+/// How many tasks of a network the heuristic estimates in the state (the rest count with
+/// their state-free costs).
+const LOOK_TASKS: usize = 64;
+
+/// The heuristic's memory: the lifted costs and the estimates per (ground task, state, depth).
+struct Heur {
+    cost: Vec<u32>,
+    memo: FxMap<(u32, u32, u8), u32>,
+    depth: u8,
+    k: usize,
+}
+
+impl<'a, 'o> Search<'a, 'o> {
+    /// The fewest actions ground task `gt` may need, looking `depth` levels down in the
+    /// current state (state `sid`): a task's estimate is the least, over the methods and
+    /// bindings (the first few) that apply now, of its subtasks' estimates one level less;
+    /// one more than its state-free cost when none applies now. Depth 0 is state-free.
+    fn estimate(&mut self, gt: u32, sid: u32, depth: u8, hr: &mut Heur) -> u32 {
+        let t = self.gtasks.key(gt)[0] as usize;
+        if depth == 0 || self.c.tasks[t].action.is_some() || hr.cost[t] >= INF {
+            return hr.cost[t];
+        }
+        if let Some(&e) = hr.memo.get(&(gt, sid, depth)) {
+            return e;
+        }
+        let c = self.c;
+        let mut best = INF;
+        let mut key: Vec<u32> = Vec::with_capacity(8);
+        for &m in self.methods_of(gt) {
+            let (bindings, count) = self.bindings_upto(m, gt, hr.k);
+            let stride = c.methods[m as usize].n_params;
+            for i in 0..count {
+                let mut sum = 0u32;
+                for (st, args) in &c.methods[m as usize].subtasks {
+                    key.clear();
+                    key.push(*st);
+                    key.extend(args.iter().map(|a| match *a {
+                        CTerm::Var(v) => {
+                            let v = v as usize;
+                            if v < stride {
+                                bindings[i * stride + v]
+                            } else {
+                                UNBOUND
+                            }
+                        }
+                        CTerm::Obj(o) => o,
+                    }));
+                    let sub = self.gtasks.intern(&key);
+                    sum = (sum + self.estimate(sub, sid, depth - 1, hr)).min(INF);
+                    if sum >= best {
+                        break;
+                    }
+                }
+                best = best.min(sum);
+            }
+        }
+        if best >= INF {
+            best = (hr.cost[t] + 1).min(INF);
+        }
+        hr.memo.insert((gt, sid, depth), best);
+        best
+    }
+
+    /// The heuristic value of network `top` in the current state `sid`.
+    fn net_estimate(&mut self, top: u32, sid: u32, hr: &mut Heur, cell_cost: &[u32]) -> u32 {
+        let mut h = 0u32;
+        let mut cur = top;
+        let mut k = 0;
+        while cur != NIL {
+            if k == LOOK_TASKS {
+                return (h + cell_cost[cur as usize]).min(INF);
+            }
+            let cell = self.arena[cur as usize];
+            h = (h + self.estimate(cell.task, sid, hr.depth, hr)).min(INF);
+            cur = cell.next;
+            k += 1;
+        }
+        h
+    }
+
+    /// The current state as a key of [`States`].
+    fn snapshot(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = Vec::new();
+        for p in 0..self.c.preds.len() as u32 {
+            if !self.state.is_static(p) {
+                v.extend_from_slice(self.state.facts_of(p));
+            }
+        }
+        v.sort_unstable();
+        let values = self.state.values();
+        if !values.is_empty() {
+            v.push(u32::MAX);
+            for x in values {
+                let b = x.to_bits();
+                v.push((b >> 32) as u32);
+                v.push(b as u32);
+            }
+        }
+        v
+    }
+
+    /// Makes the state the one `key` describes (from [`Search::snapshot`]).
+    fn load(&mut self, key: &[u32]) {
+        let n = key.iter().position(|&x| x == u32::MAX).unwrap_or(key.len());
+        let (facts, values) = key.split_at(n);
+        let mut drop = Vec::new();
+        for p in 0..self.c.preds.len() as u32 {
+            if !self.state.is_static(p) {
+                for &f in self.state.facts_of(p) {
+                    if facts.binary_search(&f).is_err() {
+                        drop.push(f);
+                    }
+                }
+            }
+        }
+        for f in drop {
+            self.state.delete(f);
+        }
+        for &f in facts {
+            self.state.add(f);
+        }
+        let stored = values.len().saturating_sub(1) / 2;
+        for i in 0..self.state.values().len() {
+            let v = if i < stored {
+                let (hi, lo) = (values[1 + 2 * i], values[2 + 2 * i]);
+                f64::from_bits(((hi as u64) << 32) | lo as u64)
+            } else {
+                f64::NAN
+            };
+            self.state.set_value(i as u32, v);
+        }
+        self.canonical_order();
+        self.state.commit();
+    }
+
+    /// Puts the true facts in key order: bindings then come in an order that depends on the
+    /// state alone, not on the path (nor on how far the depth-first search went before).
+    fn canonical_order(&mut self) {
+        for p in 0..self.c.preds.len() as u32 {
+            if !self.state.is_static(p) {
+                self.state.sort_facts_of(p);
+            }
+        }
+    }
+
+    /// The greedy best-first search, until a plan, exhaustion or a limit of the options.
+    pub(super) fn best_first(&mut self) -> Stop {
+        let c = self.c;
+        self.reset();
+        self.canonical_order();
+        self.state.commit();
+        self.stats.best_first = true;
+        let (wg, wh) = (G_WEIGHT, H_WEIGHT);
+        let cost = min_costs(c);
+        let mut hr = Heur {
+            cost: cost.clone(),
+            memo: FxMap::default(),
+            depth: LOOKAHEAD,
+            k: LOOK_BINDINGS,
+        };
+        let mut states = States::default();
+        let mut nodes: Vec<Node> = Vec::new();
+        let mut cell_cost: Vec<u32> = Vec::new();
+        let mut open: BinaryHeap<Reverse<(u32, u64, u32)>> = BinaryHeap::new();
+        let mut seen: HashSet<(u32, u64), BuildHasherDefault<FxHasher>> = HashSet::default();
+        let mut seq: u64 = u64::MAX;
+        let s0 = self.snapshot();
+        let sid0 = intern_state(&mut states, s0);
+        let mut cur_state = sid0;
+        // The initial networks, one per binding of the problem's parameters.
+        let root = c.root_method;
+        let (bindings, count) = self.bindings(root, NIL);
+        let stride = c.methods[root as usize].n_params;
+        for i in 0..count {
+            let binding = bindings[i * stride..(i + 1) * stride].to_vec();
+            let subs = &c.methods[root as usize].subtasks;
+            let n = subs.len() as u32;
+            let (top, h) = self.push_network(subs, &binding, 0, NIL, 0, &cost, &mut cell_cost);
+            if h >= INF {
+                continue;
+            }
+            let hash = if top == NIL {
+                0
+            } else {
+                self.arena[top as usize].hash
+            };
+            if !seen.insert((sid0, hash)) {
+                continue;
+            }
+            let h = self.net_estimate(top, sid0, &mut hr, &cell_cost);
+            nodes.push(Node {
+                parent: NIL,
+                state: sid0,
+                tn: top,
+                next_occ: n,
+                g: 0,
+                op: Op::Root { first: 0, n },
+            });
+            open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
+            seq -= 1;
+        }
+        let mut scratch: Vec<(u32, Vec<u32>)> = Vec::new();
+        while let Some(Reverse((_, _, ni))) = open.pop() {
+            self.stats.nodes += 1;
+            self.stats.best_first_nodes += 1;
+            if let Some(l) = self.check_limits() {
+                return Stop::Limit(l);
+            }
+            if self.stats.nodes % 4096 == 0 {
+                self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
+            }
+            let node = &nodes[ni as usize];
+            let (sid, tn, next_occ, g) = (node.state, node.tn, node.next_occ, node.g);
+            if sid != cur_state {
+                let key = states.list[sid as usize].clone();
+                self.load(&key);
+                cur_state = sid;
+            }
+            if tn == NIL {
+                if self.goal_holds() {
+                    self.rebuild_path(&nodes, ni);
+                    return Stop::Found;
+                }
+                continue;
+            }
+            let cell = self.arena[tn as usize];
+            if !self.goal_reachable(cell.may) {
+                self.stats.goal_pruned += 1;
+                continue;
+            }
+            let rest_cost = if cell.next == NIL {
+                0
+            } else {
+                cell_cost[cell.next as usize]
+            };
+            let task = self.gtasks.key(cell.task)[0];
+            if let Some(a) = c.tasks[task as usize].action {
+                let act = &c.actions[a as usize];
+                let Some(mut slots) = self.action_slots(a, cell.task) else {
+                    continue;
+                };
+                let ev = Eval {
+                    c,
+                    s: &self.state,
+                    types: &act.slot_types,
+                };
+                if !ev.all_hold(&act.pre, &mut slots) {
+                    continue;
+                }
+                self.effects.clear();
+                if !ev.effects(&act.effects, &mut slots, &mut self.effects) {
+                    continue;
+                }
+                self.effects.apply(&mut self.state);
+                self.canonical_order();
+                self.state.commit();
+                let key = self.snapshot();
+                let sid2 = intern_state(&mut states, key);
+                cur_state = sid2;
+                let hash = if cell.next == NIL {
+                    0
+                } else {
+                    self.arena[cell.next as usize].hash
+                };
+                if !seen.insert((sid2, hash)) {
+                    self.stats.revisits_pruned += 1;
+                    continue;
+                }
+                nodes.push(Node {
+                    parent: ni,
+                    state: sid2,
+                    tn: cell.next,
+                    next_occ,
+                    g: g + 1,
+                    op: Op::Action {
+                        occ: cell.occ,
+                        task: cell.task,
+                    },
+                });
+                let h = self.net_estimate(cell.next, sid2, &mut hr, &cell_cost);
+                let h = prio(g + 1, h, wg, wh);
+                open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
+                seq -= 1;
+                continue;
+            }
+            // Every method and binding, in domain order.
+            scratch.clear();
+            for &m in self.methods_of(cell.task) {
+                let (bindings, count) = self.bindings(m, cell.task);
+                let stride = c.methods[m as usize].n_params;
+                for i in 0..count {
+                    scratch.push((m, bindings[i * stride..(i + 1) * stride].to_vec()));
+                }
+            }
+            for (m, binding) in std::mem::take(&mut scratch) {
+                let subs = &c.methods[m as usize].subtasks;
+                let n = subs.len() as u32;
+                let (top, h) = self.push_network(
+                    subs,
+                    &binding,
+                    next_occ,
+                    cell.next,
+                    rest_cost,
+                    &cost,
+                    &mut cell_cost,
+                );
+                if h >= INF {
+                    continue;
+                }
+                let hash = if top == NIL {
+                    0
+                } else {
+                    self.arena[top as usize].hash
+                };
+                if !seen.insert((sid, hash)) {
+                    self.stats.revisits_pruned += 1;
+                    continue;
+                }
+                let h = self.net_estimate(top, sid, &mut hr, &cell_cost);
+                let h = prio(g, h, wg, wh);
+                nodes.push(Node {
+                    parent: ni,
+                    state: sid,
+                    tn: top,
+                    next_occ: next_occ + n,
+                    g,
+                    op: Op::Method {
+                        occ: cell.occ,
+                        task: cell.task,
+                        method: m,
+                        first: next_occ,
+                        n,
+                    },
+                });
+                open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
+                seq -= 1;
+            }
+        }
+        Stop::Exhausted
+    }
+
+    /// Pushes `subs` under `binding` on top of network `next` (whose cost is `rest`), with
+    /// occurrence ids from `first`; returns the top cell and the network's cost.
+    #[allow(clippy::too_many_arguments)]
+    fn push_network(
+        &mut self,
+        subs: &[(u32, Vec<CTerm>)],
+        binding: &[u32],
+        first: u32,
+        next: u32,
+        rest: u32,
+        cost: &[u32],
+        cell_cost: &mut Vec<u32>,
+    ) -> (u32, u32) {
+        let mut top = next;
+        let mut h = rest;
+        let mut key: Vec<u32> = Vec::with_capacity(8);
+        for (i, (t, args)) in subs.iter().enumerate().rev() {
+            h = (h + cost[*t as usize]).min(INF);
+            if h >= INF {
+                return (top, INF);
+            }
+            key.clear();
+            key.push(*t);
+            key.extend(args.iter().map(|a| match *a {
+                CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
+                CTerm::Obj(o) => o,
+            }));
+            let gt = self.gtasks.intern(&key);
+            top = self.push_cell(gt, first + i as u32, top, NIL);
+            if cell_cost.len() < self.arena.len() {
+                cell_cost.resize(self.arena.len(), 0);
+            }
+            cell_cost[top as usize] = h;
+        }
+        (top, h)
+    }
+
+    /// Fills the plan's steps and decomposition tree from the path to node `ni`.
+    fn rebuild_path(&mut self, nodes: &[Node], ni: u32) {
+        let mut path = Vec::new();
+        let mut i = ni;
+        while i != NIL {
+            path.push(nodes[i as usize].op);
+            i = nodes[i as usize].parent;
+        }
+        path.reverse();
+        self.steps.clear();
+        self.tree.clear();
+        for op in path {
+            match op {
+                Op::Root { first, n } => self.tree.push(TreeRec {
+                    occ: NIL,
+                    task: NIL,
+                    method: self.c.root_method,
+                    first,
+                    n,
+                    parent: NIL,
+                    steps: 0,
+                    state: 0,
+                }),
+                Op::Action { occ, task } => self.steps.push(Step {
+                    occ,
+                    task,
+                    geo: None,
+                }),
+                Op::Method {
+                    occ,
+                    task,
+                    method,
+                    first,
+                    n,
+                } => self.tree.push(TreeRec {
+                    occ,
+                    task,
+                    method,
+                    first,
+                    n,
+                    parent: NIL,
+                    steps: 0,
+                    state: 0,
+                }),
+            }
+        }
+    }
+}
+
+fn prio(g: u32, h: u32, wg: u32, wh: u32) -> u32 {
+    if h >= INF {
+        return INF;
+    }
+    (g.saturating_mul(wg))
+        .saturating_add(h.saturating_mul(wh))
+        .min(INF - 1)
+}
+
+fn intern_state(states: &mut States, key: Vec<u32>) -> u32 {
+    if let Some(&id) = states.ids.get(key.as_slice()) {
+        return id;
+    }
+    let id = states.list.len() as u32;
+    let b: Box<[u32]> = key.into();
+    states.list.push(b.clone());
+    states.ids.insert(b, id);
+    id
+}

@@ -1,0 +1,89 @@
+//! The best-first fallback: a search the domain-order depth-first search gets lost in is
+//! solved once the depth-first search has used its share of the time limit, and a Freecell
+//! problem (IPC 2020, learned methods) when the shared benchmarks are there.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use htn::model::{Domain, Problem};
+use htn::planner::{Limit, Limits, Outcome, PlannerOptions, SearchResult, plan};
+use htn::validate::validate;
+
+fn load(dir: &Path, domain: &str, problem: &str) -> (Domain, Problem) {
+    let d = htn::load_domain(dir.join(domain)).unwrap();
+    let p = htn::load_problem(dir.join(problem), &d).unwrap();
+    (d, p)
+}
+
+fn wander(time: f64, share: f64) -> (Domain, Problem, SearchResult) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/domains");
+    let (d, p) = load(&dir, "wander-domain.hddl", "wander-22.hddl");
+    let opts = PlannerOptions {
+        limits: Limits {
+            time: Some(Duration::from_secs_f64(time)),
+            ..Limits::default()
+        },
+        best_first_share: share,
+        ..PlannerOptions::default()
+    };
+    let r = plan(&d, &p, &opts, None).unwrap();
+    (d, p, r)
+}
+
+#[test]
+fn the_best_first_fallback_takes_the_short_way_the_depth_first_search_never_reaches() {
+    let (d, p, r) = wander(2.0, 0.8);
+    let Outcome::Found { plan } = &r.outcome else {
+        panic!("no plan: {:?}", r.outcome)
+    };
+    assert!(r.stats.best_first, "the plan comes from the fallback");
+    assert!(r.stats.best_first_nodes > 0);
+    validate(&d, &p, plan, &[]).unwrap();
+    let names: Vec<&str> = plan.actions.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["finish"]);
+    // The same plan again (the fallback does not depend on how far the depth-first search got).
+    let (_, _, again) = wander(1.0, 0.8);
+    assert_eq!(again.outcome, r.outcome);
+}
+
+#[test]
+fn without_the_fallback_the_depth_first_search_runs_out_of_time() {
+    let (_, _, r) = wander(0.3, 0.0);
+    assert_eq!(r.outcome, Outcome::LimitReached { limit: Limit::Time });
+    assert!(!r.stats.best_first);
+}
+
+fn freecell() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/benchmarks/ipc2020-total-order/Freecell-Learned-ECAI-16");
+    if dir.join("domain.hddl").is_file() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: no Freecell benchmark folder at {} (the shared benchmarks are absent)",
+            dir.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn a_freecell_problem_is_solved_by_the_fallback() {
+    let Some(dir) = freecell() else { return };
+    let (d, p) = load(&dir, "domain.hddl", "probfreecell-02-2.hddl");
+    let opts = PlannerOptions {
+        limits: Limits {
+            time: Some(Duration::from_secs(60)),
+            ..Limits::default()
+        },
+        // The depth-first search gets lost here: start with the best-first search.
+        best_first_share: 1.0,
+        ..PlannerOptions::default()
+    };
+    let r = plan(&d, &p, &opts, None).unwrap();
+    let Outcome::Found { plan } = &r.outcome else {
+        panic!("no plan: {:?} after {:?}", r.outcome, r.stats)
+    };
+    assert!(r.stats.best_first);
+    validate(&d, &p, plan, &[]).unwrap();
+}
