@@ -404,7 +404,39 @@ fn connect(
 ///
 /// `valid` says whether one configuration is free (collision checks, extra constraints). The
 /// direct edge is tried first. Both ends are checked. Deterministic for the state of `rng`.
+/// A path whose tree edges fail the certification (an edge cut a thin obstacle between its
+/// coarse checks) is searched for again with new trees, up to [`CERTIFY_ATTEMPTS`] times.
 pub fn plan(
+    space: &JointSpace,
+    start: &[f32],
+    goal: &[f32],
+    mut valid: impl FnMut(&[f32]) -> bool,
+    params: &RrtParams,
+    rng: &mut fastrand::Rng,
+) -> Result<(JointPath, RrtStats), (RrtError, RrtStats)> {
+    let mut checks = 0;
+    for attempt in 1..=CERTIFY_ATTEMPTS {
+        match plan_once(space, start, goal, &mut valid, params, rng) {
+            Err((RrtError::Certification(_), st)) if attempt < CERTIFY_ATTEMPTS => {
+                checks += st.checks;
+            }
+            Ok((p, mut st)) => {
+                st.checks += checks;
+                return Ok((p, st));
+            }
+            Err((e, mut st)) => {
+                st.checks += checks;
+                return Err((e, st));
+            }
+        }
+    }
+    unreachable!("the last attempt returns")
+}
+
+/// Searches with new trees after a path fails its certification, at most this many times.
+pub const CERTIFY_ATTEMPTS: usize = 3;
+
+fn plan_once(
     space: &JointSpace,
     start: &[f32],
     goal: &[f32],
