@@ -1484,26 +1484,8 @@ impl Search {
         };
         // Trajectories.
         if kind.hands_over() {
-            if !self.held && !self.ensure_approach(ci) {
-                return None;
-            }
-            let pick = if self.held {
-                None
-            } else {
-                self.pick_cache.get(&ci).cloned().flatten()
-            };
-            let from = pick
-                .as_ref()
-                .map(|p| p.q_lift.clone())
-                .unwrap_or_else(|| q0.clone());
-            let mut trajectories = match &pick {
-                Some(p) => self.pick_trajectories(ci, p),
-                None => Vec::new(),
-            };
-            let held_rec = Some(HeldRecord {
-                object: oname.clone(),
-                object_in_tool: object_in_tool.into(),
-            });
+            let (from, mut trajectories, held_rec) =
+                self.carry_start(ci, &q0, &oname, object_in_tool)?;
             self.stats.planner_calls += 1;
             let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
                 Ok((p, _)) => p,
@@ -1539,26 +1521,8 @@ impl Search {
         // The motions planned by RRT, the costly part, cheapest first: the pick's approach (once
         // per grasp), the arm's return, then the transfer with the object held.
         let (down, q_above, retreat, q_ret) = placing?;
-        if !self.held && !self.ensure_approach(ci) {
-            return None;
-        }
-        let pick = if self.held {
-            None
-        } else {
-            self.pick_cache.get(&ci).cloned().flatten()
-        };
-        let from = pick
-            .as_ref()
-            .map(|p| p.q_lift.clone())
-            .unwrap_or_else(|| q0.clone());
-        let mut trajectories = match &pick {
-            Some(p) => self.pick_trajectories(ci, p),
-            None => Vec::new(),
-        };
-        let held_rec = Some(HeldRecord {
-            object: oname.clone(),
-            object_in_tool: object_in_tool.into(),
-        });
+        let (from, mut trajectories, held_rec) =
+            self.carry_start(ci, &q0, &oname, object_in_tool)?;
         // Return the arm to where it started, the object now an obstacle where it was placed.
         let obstacles_after = Arc::new(robot::near(
             &robot::obstacles(&after, robot, &[]),
@@ -1826,6 +1790,39 @@ impl Search {
             ignored,
             straddles: straddles.map(|(n, p)| (n, p.into())),
         }
+    }
+
+    /// Where carrying the object starts for choice `ci`: the arm lifted after the pick (whose
+    /// trajectories come first), or `q0` when the object is already held; with the record of
+    /// the held object. `None` when the pick has no collision-free approach.
+    fn carry_start(
+        &mut self,
+        ci: usize,
+        q0: &[f32],
+        oname: &str,
+        object_in_tool: Pose,
+    ) -> Option<(Vec<f32>, Vec<Trajectory>, Option<HeldRecord>)> {
+        if !self.held && !self.ensure_approach(ci) {
+            return None;
+        }
+        let pick = if self.held {
+            None
+        } else {
+            self.pick_cache.get(&ci).cloned().flatten()
+        };
+        let from = pick
+            .as_ref()
+            .map(|p| p.q_lift.clone())
+            .unwrap_or_else(|| q0.to_vec());
+        let trajectories = match &pick {
+            Some(p) => self.pick_trajectories(ci, p),
+            None => Vec::new(),
+        };
+        let held = Some(HeldRecord {
+            object: oname.to_string(),
+            object_in_tool: object_in_tool.into(),
+        });
+        Some((from, trajectories, held))
     }
 
     fn pick_trajectories(&self, ci: usize, p: &PickPlan) -> Vec<Trajectory> {
