@@ -274,6 +274,21 @@ pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
 
 /// A held object for collision checks: `object` attached to the arm's tool frame at `grasp`
 /// (the object's shape pose in the tool frame).
+/// The object the robot carries in one of its grippers, if any, as a held object for its
+/// collision checks (the base's drives must carry it round obstacles too). With an object in
+/// each gripper, the first arm's.
+pub fn carried(world: &World, setup: &RobotSetup) -> Result<Option<HeldObject>, String> {
+    for o in world.object_ids() {
+        let Some(att) = world.attachment(o).filter(|a| a.agent == setup.agent) else {
+            continue;
+        };
+        if let Some(arm) = setup.arms.iter().find(|a| a.tool_link == att.link) {
+            return held_object(world, setup, arm, o, att.grasp).map(Some);
+        }
+    }
+    Ok(None)
+}
+
 pub fn held_object(
     world: &World,
     setup: &RobotSetup,

@@ -1951,8 +1951,47 @@ impl Search {
             obstacles,
             self.world.agent_state(robot).base,
         );
+        match robot::carried(&self.world, &self.setup) {
+            Ok(held) => checker.set_held_object(held),
+            Err(e) => {
+                self.failure = Some(Failure {
+                    constraint: "object-collision".into(),
+                    message: format!("the object the robot carries: {e}"),
+                    limit: false,
+                });
+                return None;
+            }
+        }
         let start_base = self.world.agent_state(robot).base;
         let (sx, sy) = (start_base.translation.x, start_base.translation.y);
+        // Boxed in (an arm reaching over furniture, say): no base path starts anywhere, so
+        // say so now rather than after a failed path search to every candidate pose.
+        if self.pi == 0 {
+            let step = 0.05;
+            let free = (0..16).any(|k| {
+                let a = k as f32 * std::f32::consts::TAU / 16.0;
+                let mut ck = checker.clone();
+                ck.set_base(Pose::from_parts(
+                    start_base.translation + Vector::new(a.cos(), a.sin(), 0.0) * step,
+                    start_base.rotation,
+                ));
+                ck.is_config_free(&q)
+            });
+            if !free {
+                let why = checker
+                    .first_collision(&q)
+                    .map(|c| format!(" (already: {c})"))
+                    .unwrap_or_default();
+                self.failure = Some(Failure {
+                    constraint: "object-collision".into(),
+                    message: format!(
+                        "the robot cannot move its base: every move of {step} m collides{why}"
+                    ),
+                    limit: false,
+                });
+                return None;
+            }
+        }
         let syaw = start_base
             .rotation
             .to_euler(parry3d::glamx::EulerRot::ZYX)
@@ -1967,6 +2006,8 @@ impl Search {
             (bounds.mins.y.min(sy), bounds.maxs.y.max(sy), false),
             (0.0, 0.0, true),
         ]);
+        let mut region: Option<FreeRegion> = None;
+        let mut rrt_failed = false;
         loop {
             if self.out_of_time(began) {
                 self.failure = Some(Failure {
@@ -1997,6 +2038,25 @@ impl Search {
             if !target.within_reach(&sh, rreach) {
                 self.reject(Stage::Reach, || {
                     "the target is out of the arm's reach from every free base pose".into()
+                });
+                continue;
+            }
+            // Once a path search failed: is the pose in the free region where the robot
+            // stands at all? (Cheaper than a path search that cannot succeed.)
+            if rrt_failed && region.is_none() {
+                region = Some(free_region(
+                    &checker,
+                    &q,
+                    (sx, sy),
+                    start_base.rotation,
+                    &bounds,
+                ));
+            }
+            if region.as_ref().is_some_and(|r| !r.contains(c.x, c.y)) {
+                self.reject(Stage::Trajectory, || {
+                    "no collision-free base path: the base poses near the target are not \
+                     connected to where the robot stands"
+                        .into()
                 });
                 continue;
             }
@@ -2054,6 +2114,7 @@ impl Search {
                     });
                 }
                 Err((e, _)) => {
+                    rrt_failed = true;
                     self.reject(Stage::Trajectory, || {
                         format!("no collision-free base path: {e}")
                     });
@@ -2167,6 +2228,59 @@ fn visibility_upto(
         }
     }
     v
+}
+
+/// The floor cells the robot's base can reach from where it stands without turning, on a grid
+/// of [`FreeRegion::STEP`] (flood fill, each cell's configuration checked): a cheap test of
+/// whether a base pose is worth a path search.
+struct FreeRegion {
+    origin: (f32, f32),
+    cells: HashSet<(i32, i32)>,
+}
+
+impl FreeRegion {
+    const STEP: f32 = 0.05;
+
+    /// Whether the cell of `(x, y)` or one next to it is reachable.
+    fn contains(&self, x: f32, y: f32) -> bool {
+        let i = ((x - self.origin.0) / Self::STEP).round() as i32;
+        let j = ((y - self.origin.1) / Self::STEP).round() as i32;
+        [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)]
+            .iter()
+            .any(|(di, dj)| self.cells.contains(&(i + di, j + dj)))
+    }
+}
+
+fn free_region(
+    checker: &geometry::collision::CollisionChecker,
+    q: &[f32],
+    origin: (f32, f32),
+    rotation: Rotation,
+    bounds: &parry3d::bounding_volume::Aabb,
+) -> FreeRegion {
+    let step = FreeRegion::STEP;
+    let mut ck = checker.clone();
+    let mut free = |i: i32, j: i32| {
+        let (x, y) = (origin.0 + i as f32 * step, origin.1 + j as f32 * step);
+        if x < bounds.mins.x || x > bounds.maxs.x || y < bounds.mins.y || y > bounds.maxs.y {
+            return false;
+        }
+        ck.set_base(Pose::from_parts(Vector::new(x, y, 0.0), rotation));
+        ck.is_config_free(q)
+    };
+    let mut cells = HashSet::new();
+    let mut todo = vec![(0, 0)];
+    cells.insert((0, 0));
+    while let Some((i, j)) = todo.pop() {
+        for (di, dj) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let n = (i + di, j + dj);
+            if !cells.contains(&n) && free(n.0, n.1) {
+                cells.insert(n);
+                todo.push(n);
+            }
+        }
+    }
+    FreeRegion { origin, cells }
 }
 
 fn key(p: Vector) -> (i32, i32, i32) {

@@ -415,3 +415,91 @@ fn navigate_to_furniture_reaches_its_support_surface() {
         );
     }
 }
+
+/// A PR2 in a closed pen, its target outside: navigate-to fails on the free region (the poses
+/// near the target are not connected to where the robot stands), not after a path search to
+/// every candidate pose; with the pen's walls against the base, at once.
+#[test]
+fn navigate_to_says_when_the_base_is_penned_in() {
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    let pen = |gap: f32, open: bool| {
+        let h = 0.36 + gap; // the PR2's base is about 0.67 m square
+        // The east wall stands between the robot and the crate; open, it is far away.
+        let east = if open { 2.9 } else { h };
+        let text = format!(
+            r#"
+[scene]
+bounds = {{ min = [-2.0, -2.0, -0.05], max = [3.0, 2.0, 2.0] }}
+[[objects]]
+name = "wall-n"
+shape = {{ box = [{w}, 0.02, 0.5] }}
+pose = {{ xyz = [0.0, {h}, 0.5] }}
+[[objects]]
+name = "wall-s"
+shape = {{ box = [{w}, 0.02, 0.5] }}
+pose = {{ xyz = [0.0, -{h}, 0.5] }}
+[[objects]]
+name = "wall-e"
+shape = {{ box = [0.02, {w}, 0.5] }}
+pose = {{ xyz = [{east}, 0.0, 0.5] }}
+[[objects]]
+name = "wall-w"
+shape = {{ box = [0.02, {w}, 0.5] }}
+pose = {{ xyz = [-{h}, 0.0, 0.5] }}
+[[objects]]
+name = "crate"
+shape = {{ box = [0.2, 0.2, 0.45] }}
+pose = {{ xyz = [2.2, 0.0, 0.45] }}
+movable = true
+[[agents]]
+name = "pr2"
+kind = "robot"
+urdf = "{urdf}"
+base = {{ x = 0, y = 0, yaw = 0 }}
+[agents.joints]
+torso_lift_joint = 0.3
+r_shoulder_pan_joint = -0.383
+r_shoulder_lift_joint = 0.886
+r_upper_arm_roll_joint = -0.895
+r_elbow_flex_joint = -2.321
+r_forearm_roll_joint = 0.501
+r_wrist_flex_joint = -1.479
+r_wrist_roll_joint = 0.304
+l_shoulder_pan_joint = 0.383
+l_shoulder_lift_joint = 0.886
+l_upper_arm_roll_joint = 0.895
+l_elbow_flex_joint = -2.321
+l_forearm_roll_joint = -0.501
+l_wrist_flex_joint = -1.479
+l_wrist_roll_joint = -0.304
+"#,
+            w = h + 0.02,
+            urdf = models.join("pr2.urdf").display()
+        );
+        World::from_scene(
+            geometry::scene::Scene::from_str(&text, "pen.toml", std::path::Path::new("."), "pen")
+                .unwrap(),
+        )
+        .unwrap()
+    };
+    let planner = Planner::new();
+    let world = pen(0.12, true);
+    let mut stream = planner
+        .run(&world, "navigate-to", &["crate"], &CallOptions::seeded(1))
+        .unwrap();
+    let s = stream.next().expect("out of the open pen");
+    recheck(&planner, &world, &s);
+    for (gap, words) in [
+        (0.12, "not connected to where the robot stands"),
+        (0.0, "cannot move its base"),
+    ] {
+        let world = pen(gap, false);
+        let mut stream = planner
+            .run(&world, "navigate-to", &["crate"], &CallOptions::seeded(1))
+            .unwrap();
+        assert!(stream.next().is_none(), "gap {gap}: a way out of the pen");
+        let f = stream.failure().unwrap();
+        assert!(f.message.contains(words), "gap {gap}: {f}");
+        assert!(!f.limit, "gap {gap}: {f}");
+    }
+}
