@@ -40,7 +40,8 @@ pub struct Args {
     /// Backtracking over geometric solutions: symbolic, chronological or geometric-first.
     #[arg(long, value_enum, default_value_t = StrategyArg::Chronological)]
     pub strategy: StrategyArg,
-    /// With --strategy geometric-first: how many other geometric solutions to try per failure.
+    /// With --strategy geometric-first: how many other geometric solutions to try per failure,
+    /// shared among the earlier geometric tasks, the latest first.
     #[arg(long, alias = "geo-alternatives", default_value_t = 3)]
     pub geo_k: usize,
     /// A 3D scene (docs/scene-format.md): geometric tasks are answered by the GTP in it, and the

@@ -56,10 +56,12 @@ pub enum Strategy {
     /// Every choice point, latest first (interleaved backtracking).
     #[default]
     Chronological,
-    /// On a geometric failure, first try up to `k` other solutions of earlier geometric tasks,
-    /// newest first, keeping the HTN choices made since and re-planning the geometric tasks
-    /// after it; if none makes the failed task solvable, fall back to HTN alternatives (the
-    /// paper's Figure 3). Other solutions are tried only this way.
+    /// On a geometric failure (a GS action with no solution, or a task none of whose methods
+    /// applies while their preconditions read shared literals), first try up to `k` other
+    /// solutions of earlier geometric tasks, newest first, each its share of the `k`, keeping
+    /// the HTN choices made since and re-planning the geometric tasks after it; if none makes
+    /// the failed task solvable, fall back to HTN alternatives (the paper's Figure 3). Other
+    /// solutions are tried only this way.
     GeometricFirst { k: usize },
 }
 
