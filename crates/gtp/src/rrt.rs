@@ -49,6 +49,11 @@ impl JointSpace {
 
     /// Euclidean distance in joint space (the short way round for continuous joints).
     pub fn distance(&self, a: &[f32], b: &[f32]) -> f32 {
+        self.distance_squared(a, b).sqrt()
+    }
+
+    /// The square of [`JointSpace::distance`] (for comparisons: no root).
+    pub fn distance_squared(&self, a: &[f32], b: &[f32]) -> f32 {
         let mut s = 0.0;
         for i in 0..a.len() {
             let mut d = b[i] - a[i];
@@ -57,7 +62,7 @@ impl JointSpace {
             }
             s += d * d;
         }
-        s.sqrt()
+        s
     }
 
     /// The largest per-joint difference (the short way round for continuous joints).
@@ -322,7 +327,7 @@ impl Tree {
     fn nearest(&self, space: &JointSpace, q: &[f32]) -> usize {
         let mut best = (f32::INFINITY, 0);
         for i in 0..self.len() {
-            let d = space.distance(self.get(i), q);
+            let d = space.distance_squared(self.get(i), q);
             if d < best.0 {
                 best = (d, i);
             }
