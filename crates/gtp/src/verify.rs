@@ -154,7 +154,14 @@ pub fn recheck_trajectories(
                         w.attach_with_grasp(o, robot_id, arm.tool_link, h.object_in_tool.into());
                     }
                 }
-                Phase::Place => w.detach(o),
+                Phase::Place => {
+                    // Released at the placement the solution declares (and its world holds),
+                    // within the inverse kinematics' tolerance of where the gripper left it.
+                    w.detach(o);
+                    if let Some(p) = &summary.placement {
+                        w.set_object_pose(o, p.pose.into());
+                    }
+                }
                 _ => {}
             }
         }
