@@ -36,8 +36,6 @@ fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
     }
 }
 
-/// Adds to `m` the goal literals an action with arguments `args` (some may be `WILD`) may
-/// achieve.
 /// Whether `f` reads a shared predicate (a fact that geometry decides).
 fn reads_shared(c: &Compiled, f: &CFormula) -> bool {
     match f {
@@ -50,6 +48,8 @@ fn reads_shared(c: &Compiled, f: &CFormula) -> bool {
     }
 }
 
+/// Adds to `m` the goal literals an action with arguments `args` (some may be `WILD`) may
+/// achieve.
 fn ground_effect_mask(c: &Compiled, effs: &[CEffect], args: &[u32], m: &mut [u64]) {
     for e in effs {
         match e {
