@@ -177,8 +177,8 @@ fn not_enough_credit_pays_by_card_m7() {
 
 /// m9: the POS machine is out of the robot's reach (on a far desk); the robot drives to it,
 /// picks it, drives back and makes it accessible. (In the base domain PICK chooses its grasp on
-/// the far desk blind to the stand: only chronological backtracking finds one that PUTON can
-/// use, after ~1,800 GTP backtracks; the compound variant is the paper's remedy.)
+/// the far desk blind to the stand: symbolic backtracking finds none that PUTON can use, the
+/// other strategies after some 200 GTP backtracks; the compound variant is the paper's remedy.)
 #[test]
 fn pos_machine_out_of_reach_is_fetched_m9() {
     let r = run(
