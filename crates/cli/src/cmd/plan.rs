@@ -60,6 +60,18 @@ pub struct Args {
     /// Turn off the left-recursion check (for experiments).
     #[arg(long, hide = true)]
     pub no_loop_check: bool,
+    /// With --time-limit, on problems without geometric tasks: the share of the time left to
+    /// the best-first fallback search once the depth-first search has used the rest without a
+    /// plan (0 turns the fallback off, 1 starts with it).
+    #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
+    pub best_first_share: f64,
+}
+
+fn share(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a share between 0 and 1, found `{s}`")),
+    }
 }
 
 /// The `--strategy` values.
@@ -90,6 +102,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         },
         duplicate_detection: !args.no_duplicate_detection,
         loop_check: !args.no_loop_check,
+        best_first_share: args.best_first_share,
         ..PlannerOptions::default()
     };
     if let Some(scene) = &args.scene {
