@@ -183,6 +183,15 @@ impl<'a, 'o> Search<'a, 'o> {
         h
     }
 
+    /// The hash of the task network that starts at cell `top` (0 for the empty network).
+    fn network_hash(&self, top: u32) -> u64 {
+        if top == NIL {
+            0
+        } else {
+            self.arena[top as usize].hash
+        }
+    }
+
     /// The current state as a key of [`States`].
     fn snapshot(&self) -> Vec<u32> {
         let mut v: Vec<u32> = Vec::new();
@@ -284,11 +293,7 @@ impl<'a, 'o> Search<'a, 'o> {
             if h >= INF {
                 continue;
             }
-            let hash = if top == NIL {
-                0
-            } else {
-                self.arena[top as usize].hash
-            };
+            let hash = self.network_hash(top);
             if !seen.insert((sid0, hash)) {
                 continue;
             }
@@ -362,11 +367,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 let key = self.snapshot();
                 let sid2 = intern_state(&mut states, key);
                 cur_state = sid2;
-                let hash = if cell.next == NIL {
-                    0
-                } else {
-                    self.arena[cell.next as usize].hash
-                };
+                let hash = self.network_hash(cell.next);
                 if !seen.insert((sid2, hash)) {
                     self.stats.revisits_pruned += 1;
                     continue;
@@ -412,11 +413,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 if h >= INF {
                     continue;
                 }
-                let hash = if top == NIL {
-                    0
-                } else {
-                    self.arena[top as usize].hash
-                };
+                let hash = self.network_hash(top);
                 if !seen.insert((sid, hash)) {
                     self.stats.revisits_pruned += 1;
                     continue;
