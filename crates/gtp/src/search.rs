@@ -315,6 +315,36 @@ impl Search {
         }
     }
 
+    /// `r`'s value; or, rejecting at `stage` with `what` and the error, `None`.
+    fn or_reject<T, E: std::fmt::Display>(
+        &mut self,
+        r: Result<T, E>,
+        stage: Stage,
+        what: impl FnOnce() -> String,
+    ) -> Option<T> {
+        match r {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.reject(stage, || format!("{}: {e}", what()));
+                None
+            }
+        }
+    }
+
+    /// A motion carrying the object, as [`Search::or_reject`] at the trajectory stage; a
+    /// start in collision also drops choice `ci` (its start is the same whatever the tuple).
+    fn transfer_or_reject(
+        &mut self,
+        r: Result<(JointPath, crate::rrt::RrtStats), crate::rrt::RrtError>,
+        ci: usize,
+        what: impl FnOnce() -> String,
+    ) -> Option<JointPath> {
+        if matches!(r, Err(crate::rrt::RrtError::InvalidStart)) {
+            self.failed_choices.insert(ci);
+        }
+        self.or_reject(r.map(|(p, _)| p), Stage::Trajectory, what)
+    }
+
     /// The next solution, or `None` when the search is exhausted or hit its time limit
     /// ([`Search::failure`] then says why).
     pub(crate) fn next_solution(&mut self) -> Option<Solution> {
@@ -1085,23 +1115,19 @@ impl Search {
             return None;
         }
         let mut checks = 0;
-        let back_path = match open_wo.straight(
-            &qg,
-            back,
-            STRAIGHT_STEPS,
-            &rrt,
-            &straddle,
-            &mut rng,
-            &mut checks,
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                self.reject(Stage::Pick, || {
-                    format!("no straight approach to `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
+        let back_path = self.or_reject(
+            open_wo.straight(
+                &qg,
+                back,
+                STRAIGHT_STEPS,
+                &rrt,
+                &straddle,
+                &mut rng,
+                &mut checks,
+            ),
+            Stage::Pick,
+            || format!("no straight approach to `{oname}`"),
+        )?;
         let qpre = back_path.waypoints.last().unwrap().clone();
         let open_all = self
             .motion(
@@ -1143,23 +1169,19 @@ impl Search {
             )
             .ok()?;
         let hold_check = |qa: &[f32]| held_free_of_rest.free(qa);
-        let lift1 = match rob_wo.straight(
-            &qg,
-            Vector::Z * unstick,
-            1,
-            &rrt,
-            &hold_check,
-            &mut rng,
-            &mut checks,
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                self.reject(Stage::Pick, || {
-                    format!("no collision-free lift of `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
+        let lift1 = self.or_reject(
+            rob_wo.straight(
+                &qg,
+                Vector::Z * unstick,
+                1,
+                &rrt,
+                &hold_check,
+                &mut rng,
+                &mut checks,
+            ),
+            Stage::Pick,
+            || format!("no collision-free lift of `{oname}`"),
+        )?;
         let q1 = lift1.waypoints.last().unwrap().clone();
         let held_wo = self
             .motion(
@@ -1411,23 +1433,11 @@ impl Search {
         } else {
             // Place: straight down from above the placement.
             let up = Vector::Z * self.c.lift;
-            let mut down = match held_wo.straight(
-                &qp,
-                up,
-                STRAIGHT_STEPS,
-                &rrt,
-                &never,
-                &mut rng,
-                &mut checks,
-            ) {
-                Ok(p) => p,
-                Err(e) => {
-                    self.reject(Stage::Trajectory, || {
-                        format!("no collision-free descent to place `{oname}`: {e}")
-                    });
-                    return None;
-                }
-            };
+            let mut down = self.or_reject(
+                held_wo.straight(&qp, up, STRAIGHT_STEPS, &rrt, &never, &mut rng, &mut checks),
+                Stage::Trajectory,
+                || format!("no collision-free descent to place `{oname}`"),
+            )?;
             down.waypoints.reverse();
             let q_above = down.waypoints[0].clone();
             // Retreat: open, straight back along the gripper, the gripper checked against the
@@ -1447,23 +1457,19 @@ impl Search {
             let straddle =
                 |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
             let back = tool.rotation * Vector::X * (-self.c.approach);
-            let retreat = match open_wo.straight(
-                &qp,
-                back,
-                STRAIGHT_STEPS,
-                &rrt,
-                &straddle,
-                &mut rng,
-                &mut checks,
-            ) {
-                Ok(p) => p,
-                Err(e) => {
-                    self.reject(Stage::Trajectory, || {
-                        format!("no collision-free retreat after placing `{oname}`: {e}")
-                    });
-                    return None;
-                }
-            };
+            let retreat = self.or_reject(
+                open_wo.straight(
+                    &qp,
+                    back,
+                    STRAIGHT_STEPS,
+                    &rrt,
+                    &straddle,
+                    &mut rng,
+                    &mut checks,
+                ),
+                Stage::Trajectory,
+                || format!("no collision-free retreat after placing `{oname}`"),
+            )?;
             let q_ret = retreat.waypoints.last().unwrap().clone();
             Some((down, q_above, retreat, q_ret))
         };
@@ -1487,19 +1493,10 @@ impl Search {
             let (from, mut trajectories, held_rec) =
                 self.carry_start(ci, &q0, &oname, object_in_tool)?;
             self.stats.planner_calls += 1;
-            let transfer = match held_wo.plan(&from, &qp, &rrt, &mut rng) {
-                Ok((p, _)) => p,
-                Err(e) => {
-                    if e == crate::rrt::RrtError::InvalidStart {
-                        // The start is this choice's whatever the tuple: drop the choice.
-                        self.failed_choices.insert(ci);
-                    }
-                    self.reject(Stage::Trajectory, || {
-                        format!("no collision-free trajectory to hand `{oname}` over: {e}")
-                    });
-                    return None;
-                }
-            };
+            let transfer =
+                self.transfer_or_reject(held_wo.plan(&from, &qp, &rrt, &mut rng), ci, || {
+                    format!("no collision-free trajectory to hand `{oname}` over")
+                })?;
             trajectories.push(self.trajectory(
                 Phase::Transfer,
                 &arm,
@@ -1533,28 +1530,16 @@ impl Search {
             .motion(&setup, ch.arm, obstacles_after, None, ch.grasp.opening)
             .ok()?;
         self.stats.planner_calls += 1;
-        let home = match open_after.plan(&q_ret, &q0, &rrt, &mut rng) {
-            Ok((p, _)) => p,
-            Err(e) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free return of the arm after placing `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
+        let home = self.or_reject(
+            open_after.plan(&q_ret, &q0, &rrt, &mut rng).map(|(p, _)| p),
+            Stage::Trajectory,
+            || format!("no collision-free return of the arm after placing `{oname}`"),
+        )?;
         self.stats.planner_calls += 1;
-        let transfer = match held_wo.plan(&from, &q_above, &rrt, &mut rng) {
-            Ok((p, _)) => p,
-            Err(e) => {
-                if e == crate::rrt::RrtError::InvalidStart {
-                    self.failed_choices.insert(ci);
-                }
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free trajectory carrying `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
+        let transfer =
+            self.transfer_or_reject(held_wo.plan(&from, &q_above, &rrt, &mut rng), ci, || {
+                format!("no collision-free trajectory carrying `{oname}`")
+            })?;
         trajectories.push(self.trajectory(
             Phase::Transfer,
             &arm,
