@@ -160,6 +160,39 @@ pub fn visibility_from_upto(
     // cuts it first. Neighbouring rays are mostly cut by the same body: the last one that
     // blocked is tried first (the verdict of each ray does not depend on the order of the
     // tests).
+    // One convex occluder in front of the whole target (it cuts the four corner rays of the
+    // grid nearer than any point of the target's bounds) cuts every ray of the grid: each is a
+    // positive combination of the corner rays, so it meets the convex hull of the four corner
+    // hits, inside the occluder and nearer than the target. Nothing shows; only the ideal count
+    // is left to take, from the target alone.
+    let ray_at = |a: f32, b: f32| {
+        let dir = rot * Vector::new(1.0, a, b);
+        Ray::new(e, dir)
+    };
+    let near_target = (e - e.clamp(taabb.mins, taabb.maxs)).length();
+    let corners = [(a0, b0), (a1, b0), (a0, b1), (a1, b1)].map(|(a, b)| ray_at(a, b));
+    let hidden = near_target > 0.0
+        && occluders.iter().any(|o| {
+            o.shape.is_convex()
+                && corners.iter().all(|r| {
+                    o.first_hit(r)
+                        .is_some_and(|t| t * r.dir.length() < near_target)
+                })
+        });
+    if hidden {
+        let mut ideal = 0;
+        for j in 0..res {
+            let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
+            for i in 0..res {
+                let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
+                if obj.shape.intersects_ray(&tpose, &ray_at(a, b), f32::MAX) {
+                    ideal += 1;
+                }
+            }
+        }
+        return Visibility { shown: 0, ideal };
+    }
+
     let inv_eye = eye.rotation.inverse();
     let (tx, ty) = ((0.5 * fov[0]).tan(), (0.5 * fov[1]).tan());
     // With an early stop: shown rays beyond which the fraction exceeds `stop_above` whatever
@@ -216,6 +249,17 @@ struct Occluder<'a> {
 impl Occluder<'_> {
     /// Whether it cuts `ray` before `toi` (a part is tested in the compound's frame and counted
     /// as the compound itself counts its parts).
+    /// Where `ray` first meets it (solid: 0 from inside), in the ray's units.
+    fn first_hit(&self, ray: &Ray) -> Option<f32> {
+        match &self.part {
+            Some(part) => {
+                let local = ray.inverse_transform_by(&self.pose);
+                self.shape.cast_ray(part, &local, f32::MAX, true)
+            }
+            None => self.shape.cast_ray(&self.pose, ray, f32::MAX, true),
+        }
+    }
+
     fn blocks(&self, ray: &Ray, toi: f32) -> bool {
         if !self.aabb.intersects_local_ray(ray, toi) {
             return false;

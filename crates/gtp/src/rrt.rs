@@ -118,6 +118,13 @@ fn wrap(a: f32) -> f32 {
     if (0.0..TAU).contains(&s) {
         return s - PI;
     }
+    // One turn off (a difference of two angles in range): no remainder needed either.
+    if (-TAU..0.0).contains(&s) {
+        return s + TAU - PI;
+    }
+    if (TAU..2.0 * TAU).contains(&s) {
+        return s - TAU - PI;
+    }
     s.rem_euclid(TAU) - PI
 }
 

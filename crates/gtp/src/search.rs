@@ -904,6 +904,11 @@ impl Search {
                 });
             }
         }
+        // The least turn of the object first: its grasp, fixed in the object, then asks the
+        // least turn of the wrist, and the carry is the shorter for it.
+        let now = self.world.object_pose(o).rotation;
+        let turn = |r: Rotation| now.angle_between(r);
+        out.sort_by(|a, b| turn(a.pose.rotation).total_cmp(&turn(b.pose.rotation)));
         out
     }
 
@@ -1345,6 +1350,27 @@ impl Search {
                 format!("the gripper holding `{oname}` hits `{n}` at every placement")
             });
             return None;
+        }
+        // Cheap too: the gripper where the descent starts, holding the object, and where the
+        // retreat ends, open (the straight moves below would fail there, after an inverse
+        // kinematics each).
+        if kind.places() {
+            let obstacles = self.obstacles_wo.clone();
+            let above = Pose::from_parts(tool.translation + Vector::Z * self.c.lift, tool.rotation);
+            if let Some(n) = self.gripper_free(&above, ch.grasp.width, &obstacles) {
+                self.reject(Stage::Gripper, || {
+                    format!("the gripper holding `{oname}` hits `{n}` above every placement")
+                });
+                return None;
+            }
+            let back = tool.rotation * Vector::X * (-self.c.approach);
+            let away = Pose::from_parts(tool.translation + back, tool.rotation);
+            if let Some(n) = self.gripper_free(&away, ch.grasp.opening, &obstacles) {
+                self.reject(Stage::Gripper, || {
+                    format!("the open gripper hits `{n}` when retreating from every placement of `{oname}`")
+                });
+                return None;
+            }
         }
         // For a placement, the world after the task does not depend on the grasp (the arm
         // returns to where it was): the cheap part of the human-related verdict (reach, coarse
