@@ -333,10 +333,23 @@ impl Tree {
     }
     fn nearest(&self, space: &JointSpace, q: &[f32]) -> usize {
         let mut best = (f32::INFINITY, 0);
-        for i in 0..self.len() {
-            let d = space.distance_squared(self.get(i), q);
-            if d < best.0 {
-                best = (d, i);
+        for (i, c) in self.configs.chunks_exact(self.dim).enumerate() {
+            // As `JointSpace::distance_squared`, with fewer branches: on a continuous joint,
+            // ends within [-pi, pi) (all but a root given out of range) differ by less than a
+            // turn, and one turn, added or taken, folds the difference.
+            let mut d2 = 0.0;
+            for k in 0..self.dim {
+                let mut d = q[k] - c[k];
+                if space.continuous[k] {
+                    d -= TAU * ((d >= PI) as i32 - (d < -PI) as i32) as f32;
+                    if !(-PI..PI).contains(&d) {
+                        d = wrap(d);
+                    }
+                }
+                d2 += d * d;
+            }
+            if d2 < best.0 {
+                best = (d2, i);
             }
         }
         best.1
@@ -368,6 +381,19 @@ fn extend(
     stats: &mut RrtStats,
 ) -> Extend {
     let near = tree.nearest(space, target);
+    extend_from(tree, near, space, target, params, valid, stats)
+}
+
+/// [`extend`] from node `near`, known to be the tree's nearest to `target`.
+fn extend_from(
+    tree: &mut Tree,
+    near: usize,
+    space: &JointSpace,
+    target: &[f32],
+    params: &RrtParams,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    stats: &mut RrtStats,
+) -> Extend {
     let from = tree.get(near).to_vec();
     let d = space.distance(&from, target);
     let (to, reached) = if d <= params.max_step {
@@ -404,9 +430,12 @@ fn connect(
     valid: &mut impl FnMut(&[f32]) -> bool,
     stats: &mut RrtStats,
 ) -> Extend {
+    let mut near = tree.nearest(space, target);
     loop {
-        match extend(tree, space, target, params, valid, stats) {
-            Extend::Advanced(_) => continue,
+        // A node that advanced towards the target is the tree's nearest to it (nearer than
+        // the node it grew from, the nearest before): no search needed for the next step.
+        match extend_from(tree, near, space, target, params, valid, stats) {
+            Extend::Advanced(i) => near = i,
             other => return other,
         }
     }
