@@ -25,7 +25,7 @@ use serde::Serialize;
 
 use crate::effort::{MAX_EFFORT, aim_head, shoulders, stances};
 use crate::ik::{IkOptions, solve_ik};
-use crate::scene::{AgentId, ObjectId};
+use crate::scene::{AgentId, AgentKind, ObjectId};
 use crate::visibility::{Aim, visibility_for_agent, visibility_from};
 use crate::world::World;
 
@@ -82,6 +82,14 @@ pub fn visible_effort(
 ) -> Option<u8> {
     let thr = params.vis_threshold;
     let res = params.resolution;
+    // A person sees what they hold by raising it into view (a level-1 effort), wherever
+    // the hand is.
+    if world.agent(agent).kind() == AgentKind::Human
+        && world.attachment(object).is_some_and(|a| a.agent == agent)
+    {
+        let now = visibility_for_agent(world, agent, object, Aim::Current, res).fraction() >= thr;
+        return Some(if now { 0 } else { 1 });
+    }
     if visibility_for_agent(world, agent, object, Aim::Current, res).fraction() >= thr {
         return Some(0);
     }

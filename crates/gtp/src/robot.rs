@@ -195,16 +195,18 @@ impl RobotSetup {
     }
 }
 
-/// The obstacles of `world` for the robot: every object not held (except those in `skip`), and
-/// the collision shapes of every other agent.
+/// The obstacles of `world` for the robot: every object it does not hold (except those in
+/// `skip`; objects in other agents' hands included), and the collision shapes of every other
+/// agent.
 pub fn obstacles(world: &World, robot: AgentId, skip: &[ObjectId]) -> StaticObstacles {
     let mut list: Vec<Obstacle> = world
-        .obstacles()
-        .filter(|(id, _, _)| !skip.contains(id))
-        .map(|(id, shape, pose)| Obstacle {
+        .object_ids()
+        .filter(|id| !skip.contains(id))
+        .filter(|&id| world.attachment(id).is_none_or(|at| at.agent != robot))
+        .map(|id| Obstacle {
             name: world.object(id).name.clone(),
-            pose,
-            shape: shape.clone(),
+            pose: world.object_shape_pose(id),
+            shape: world.object(id).shape.clone(),
         })
         .collect();
     for a in world.agent_ids() {

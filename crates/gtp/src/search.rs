@@ -122,6 +122,8 @@ pub(crate) struct Search {
     prechecked: HashSet<(usize, usize, usize)>,
     /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
     human_shoulders: HashMap<u8, Vec<Vector>>,
+    /// The robot's arms left out of the choices because their grippers hold something else.
+    busy_arms: Vec<String>,
     deepest: Option<Stage>,
     rejections: HashMap<Stage, usize>,
     best_visibility: Option<f32>,
@@ -170,6 +172,7 @@ impl Search {
         let mut faces = Vec::new();
         let mut choices = Vec::new();
         let mut held = false;
+        let mut busy_arms = Vec::new();
         let mut resting_on = Vec::new();
         if let Some(o) = object {
             let model = world.object(o);
@@ -212,12 +215,21 @@ impl Search {
                     },
                     tool_in_object,
                 });
-            } else if task.kind != TaskKind::NavigateTo {
+            } else if task.kind != TaskKind::NavigateTo && task.kind != TaskKind::Take {
                 let set = cfg
                     .grasps
                     .grasps(&*model.shape)
                     .map_err(|e| e.to_string())?;
-                for (ai, _) in setup.arms.iter().enumerate() {
+                for (ai, a) in setup.arms.iter().enumerate() {
+                    // A gripper already holding something cannot grasp the object.
+                    if let Some(other) = world.object_ids().find(|&id| {
+                        world
+                            .attachment(id)
+                            .is_some_and(|at| at.agent == robot && at.link == a.tool_link)
+                    }) {
+                        busy_arms.push(format!("{} holds `{}`", a.name, world.object(other).name));
+                        continue;
+                    }
                     for g in &set.grasps {
                         choices.push(Choice {
                             arm: ai,
@@ -289,6 +301,7 @@ impl Search {
             verdicts: HashMap::new(),
             prechecked: HashSet::new(),
             human_shoulders: HashMap::new(),
+            busy_arms,
             deepest: None,
             rejections: HashMap::new(),
             best_visibility: None,
@@ -355,6 +368,8 @@ impl Search {
         self.started.get_or_insert(began);
         let out = if self.task.kind == TaskKind::NavigateTo {
             self.next_navigation()
+        } else if self.task.kind == TaskKind::Take {
+            self.next_take()
         } else {
             self.next_tuple()
         };
@@ -396,6 +411,18 @@ impl Search {
                         self.explain().message
                     ),
                     limit: true,
+                });
+                return None;
+            }
+            if self.choices.is_empty() && !self.busy_arms.is_empty() {
+                self.failure = Some(Failure {
+                    constraint: "gripper".into(),
+                    message: format!(
+                        "no free gripper to grasp `{}`: {}",
+                        self.object_name(),
+                        self.busy_arms.join(", ")
+                    ),
+                    limit: false,
                 });
                 return None;
             }
@@ -1928,6 +1955,217 @@ impl Search {
             world: after,
             summary,
         }
+    }
+
+    // ---- take -------------------------------------------------------------------------------
+
+    /// `take(o, h)`: one solution. The human must reach the object where the robot holds it
+    /// out; the robot then opens its gripper and draws it straight back, the object left in
+    /// the human's nearest hand (which keeps it: it moves there, out of the workspace).
+    fn next_take(&mut self) -> Option<Solution> {
+        let (o, h) = (self.object?, self.human?);
+        let oname = self.object_name();
+        let hname = self.human_name();
+        if self.stats.solutions > 0 {
+            return None;
+        }
+        if !self.held {
+            self.failure = Some(Failure {
+                constraint: "held".into(),
+                message: format!("`{oname}` is not in the robot's gripper: nothing to take"),
+                limit: false,
+            });
+            return None;
+        }
+        let k = self.c.reach_within.unwrap_or(self.c.max_effort);
+        let world = self.world.clone();
+        let params = geometry::facts::FactParams {
+            max_effort: k,
+            ..Default::default()
+        };
+        let Some(level) =
+            geometry::facts::reachable_effort(&world, h, o, &params).filter(|l| *l <= k)
+        else {
+            self.reject(Stage::Reach, || {
+                format!("{hname} cannot reach `{oname}` where the robot holds it (effort <= {k})")
+            });
+            return None;
+        };
+        let ch = self.choices[0];
+        let setup = self.setup.clone();
+        let arm = &setup.arms[ch.arm];
+        let q0 = robot::arm_values(arm, &self.q0_full);
+        let open = self
+            .motion(
+                &setup,
+                ch.arm,
+                self.obstacles_wo.clone(),
+                None,
+                ch.grasp.opening,
+            )
+            .ok()?;
+        let shape = world.object(o).shape.clone();
+        let shape_pose = world.object_shape_pose(o);
+        let gripper = Gripper::new(ch.grasp.opening);
+        let straddle = |qa: &[f32]| !gripper.intersects(&open.tool_pose(qa), &*shape, &shape_pose);
+        // Back along the gripper, else towards the robot, else up: the first that is free.
+        let tool = open.tool_pose(&q0);
+        let mut home = world.agent_state(setup.agent).base.translation - tool.translation;
+        home.z = 0.0;
+        // Back along the gripper the fingers slide off the object, which the human holds now
+        // (they may brush it); the other ways must stay clear of it.
+        let ways = [
+            (tool.rotation * Vector::X * -1.0, false),
+            (home.normalize_or_zero(), true),
+            (Vector::Z, true),
+        ];
+        let free = |_: &[f32]| true;
+        let rrt = self.cfg.rrt.clone();
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let mut checks = 0;
+        let mut last = String::new();
+        let mut retreat = None;
+        for (way, clear) in ways.iter().filter(|(w, _)| w.length() > 0.5) {
+            self.stats.planner_calls += 1;
+            let extra: &dyn Fn(&[f32]) -> bool = if *clear { &straddle } else { &free };
+            let r = open.straight(
+                &q0,
+                *way * self.c.approach,
+                3 * STRAIGHT_STEPS,
+                &rrt,
+                extra,
+                &mut rng,
+                &mut checks,
+            );
+            match r {
+                Ok(p) => {
+                    retreat = Some((p, *clear));
+                    break;
+                }
+                Err(e) => last = e,
+            }
+        }
+        // No straight way (an arm near its joint limits): the arm planned back to where the
+        // gripper is drawn back along itself, the object an obstacle where the human holds it.
+        if retreat.is_none() {
+            let back = Pose::from_parts(
+                tool.translation - tool.rotation * Vector::X * self.c.approach,
+                tool.rotation,
+            );
+            let clear_all = self
+                .motion(
+                    &setup,
+                    ch.arm,
+                    self.obstacles_all.clone(),
+                    None,
+                    ch.grasp.opening,
+                )
+                .ok()?;
+            let any = |_: &[f32]| true;
+            self.stats.ik_calls += 1;
+            match clear_all.ik_free(
+                back,
+                &q0,
+                self.cfg.ik_tries,
+                self.cfg.ik_attempts,
+                &any,
+                &mut rng,
+            ) {
+                Ok(q_back) => {
+                    self.stats.planner_calls += 1;
+                    match clear_all.plan(&q0, &q_back, &rrt, &mut rng) {
+                        Ok((p, _)) => retreat = Some((p, true)),
+                        Err(e) => last = e.to_string(),
+                    }
+                }
+                Err(e) => {
+                    last = e.unwrap_or_else(|| "no inverse kinematics drawn back".into());
+                }
+            }
+        }
+        let Some((retreat, clear)) = retreat else {
+            self.reject(Stage::Trajectory, || {
+                format!("no collision-free retreat after handing `{oname}` to {hname}: {last}")
+            });
+            return None;
+        };
+        // The world after: the gripper open where the retreat ends, the object in the hand.
+        let mut after = world.clone();
+        let robot_id = setup.agent;
+        let mut q = self.q0_full.clone();
+        robot::set_arm_values(arm, &mut q, retreat.waypoints.last().unwrap());
+        robot::set_opening(&setup.model, arm, &mut q, ch.grasp.opening);
+        let base = after.agent_state(robot_id).base;
+        after.set_agent_config(robot_id, base, &q);
+        // The nearest free hand; with both full, the nearest, the object on what it holds.
+        let at = world.object_pose(o).translation;
+        let hands = &world.agent(h).hand_links;
+        let poses = world.agent_state(h).link_poses();
+        let in_hand = |l: usize| {
+            world
+                .object_ids()
+                .filter(|&x| {
+                    world
+                        .attachment(x)
+                        .is_some_and(|a| a.agent == h && a.link == l)
+                })
+                .collect::<Vec<_>>()
+        };
+        let Some(&hand) = hands.iter().min_by(|&&a, &&b| {
+            let key = |l: usize| (!in_hand(l).is_empty(), (poses[l].translation - at).length());
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        }) else {
+            self.failure = Some(Failure {
+                constraint: "held".into(),
+                message: format!("{hname} has no hand to take `{oname}` with"),
+                limit: false,
+            });
+            return None;
+        };
+        let hand_pose = poses[hand];
+        let below: f32 = in_hand(hand)
+            .iter()
+            .map(|&x| {
+                let b = world.object_aabb(x);
+                b.maxs.z - b.mins.z
+            })
+            .sum();
+        let rotation = world.object_pose(o).rotation;
+        let half = {
+            let b = world.object_aabb(o);
+            (b.maxs.z - b.mins.z) / 2.0
+        };
+        let held_at =
+            Pose::from_parts(hand_pose.translation + Vector::Z * (below + half), rotation);
+        after.attach_with_grasp(o, h, hand, hand_pose.inverse() * held_at);
+        let trajectories = vec![self.trajectory(
+            Phase::Retreat,
+            arm,
+            retreat,
+            None,
+            ch.grasp.opening,
+            vec![oname.clone()],
+            clear.then(|| (oname.clone(), world.object_pose(o))),
+        )];
+        // In the hand: reached at level 0 now.
+        let reach_effort = Some(0);
+        Some(Solution {
+            world: after,
+            summary: SolutionSummary {
+                task: self.task.kind,
+                args: self.task.args.clone(),
+                index: 0,
+                effort_level: level,
+                grasp: None,
+                placement: None,
+                visibility: None,
+                reach_effort,
+                robot_base: None,
+                trajectories,
+                stats: self.stats,
+            },
+        })
     }
 
     // ---- navigate-to ---------------------------------------------------------------------

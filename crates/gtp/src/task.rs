@@ -29,11 +29,14 @@ pub enum TaskKind {
     NavigateTo,
     /// `pick-and-make-accessible(o, h)`: pick with the grasp chosen for the placement.
     PickAndMakeAccessible,
+    /// `take(o, h)`: h takes o, held out by the robot, into a hand; the robot lets go and
+    /// draws its gripper back (the geometric side of the paper's WAITTAKE).
+    Take,
 }
 
 impl TaskKind {
     /// Every task kind, in the order of the paper.
-    pub const ALL: [TaskKind; 8] = [
+    pub const ALL: [TaskKind; 9] = [
         TaskKind::Pick,
         TaskKind::PlaceOn,
         TaskKind::Show,
@@ -42,6 +45,7 @@ impl TaskKind {
         TaskKind::PutAway,
         TaskKind::NavigateTo,
         TaskKind::PickAndMakeAccessible,
+        TaskKind::Take,
     ];
 
     /// The task's name as written in domains and on the command line.
@@ -55,6 +59,7 @@ impl TaskKind {
             TaskKind::PutAway => "put-away",
             TaskKind::NavigateTo => "navigate-to",
             TaskKind::PickAndMakeAccessible => "pick-and-make-accessible",
+            TaskKind::Take => "take",
         }
     }
 
@@ -86,6 +91,7 @@ impl TaskKind {
             | "pickmakeaccessible"
             | "pick-make-accessible"
             | "pickmakeacc" => TaskKind::PickAndMakeAccessible,
+            "take" | "hand-over" | "handover" | "waittake" => TaskKind::Take,
             _ => return None,
         })
     }
@@ -174,6 +180,11 @@ impl Constraints {
             TaskKind::PutAway => Constraints {
                 max_visibility: Some(0.0),
                 unreachable_within: Some(1),
+                max_effort: 1,
+                ..base
+            },
+            TaskKind::Take => Constraints {
+                reach_within: Some(1),
                 max_effort: 1,
                 ..base
             },

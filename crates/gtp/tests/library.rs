@@ -503,3 +503,53 @@ l_wrist_roll_joint = -0.304
         assert!(!f.limit, "gap {gap}: {f}");
     }
 }
+
+/// Give, then take: the member ends with the book in a hand, the robot's gripper open and
+/// drawn back along a trajectory that re-checks; the gripper is free for the next pick.
+#[test]
+fn the_member_takes_a_given_book_and_the_gripper_is_free_again() {
+    let world = library();
+    let planner = Planner::new();
+    let book = world.object_id("grey-book").unwrap();
+    let member = world.agent_id("member").unwrap();
+    let given = first(&planner, &world, "give", &["grey-book", "member"]);
+    let arm = given.summary.grasp.as_ref().unwrap().arm.clone();
+    // While the book is held, the other gripper does the next pick.
+    let other = first(&planner, &given.world, "pick", &["pos-machine"]);
+    assert_ne!(other.summary.grasp.as_ref().unwrap().arm, arm);
+    let taken = first(&planner, &given.world, "take", &["grey-book", "member"]);
+    recheck(&planner, &given.world, &taken);
+    let at = taken.world.attachment(book).expect("the book is held");
+    assert_eq!(at.agent, member);
+    assert!(world.agent(member).hand_links.contains(&at.link));
+    // The book is an obstacle in the member's hand now, and the gripper can pick again.
+    let next = first(&planner, &taken.world, "pick", &["white-book"]);
+    recheck(&planner, &taken.world, &next);
+    // Nothing to take from an empty gripper: a failure that says so.
+    let mut again = planner
+        .run(
+            &taken.world,
+            "take",
+            &["white-book", "member"],
+            &CallOptions::seeded(1),
+        )
+        .unwrap();
+    assert!(again.next().is_none());
+    assert_eq!(again.failure().unwrap().constraint, "held");
+}
+
+/// Both grippers full: a pick fails and names the gripper, not the object's size.
+#[test]
+fn a_pick_with_both_grippers_full_says_so() {
+    let world = library();
+    let planner = Planner::new();
+    let a = first(&planner, &world, "pick", &["grey-book"]);
+    let b = first(&planner, &a.world, "pick", &["pos-machine"]);
+    let mut stream = planner
+        .run(&b.world, "pick", &["white-book"], &CallOptions::seeded(1))
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert_eq!(f.constraint, "gripper");
+    assert!(f.message.contains("holds `grey-book`"), "{}", f.message);
+}

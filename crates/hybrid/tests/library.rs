@@ -269,6 +269,35 @@ fn backtracks(run: &Run) -> (u64, u64) {
     )
 }
 
+/// WAITTAKE's geometric side: every book handed over ends in one of the member's hands, and
+/// the robot's grippers hold nothing in the end.
+fn assert_taken_books_in_hand(run: &Run) {
+    let w = run.final_world();
+    let member = w.agent_id("member").unwrap();
+    let taken: Vec<&String> = plan(run)
+        .actions
+        .iter()
+        .filter(|a| a.name == "waittake")
+        .map(|a| &a.args[0])
+        .collect();
+    assert!(!taken.is_empty());
+    for b in taken {
+        let at = w.attachment(w.object_id(b).unwrap());
+        assert!(
+            at.is_some_and(|at| at.agent == member && w.agent(member).hand_links.contains(&at.link)),
+            "{b} is not in the member's hand: {at:?}"
+        );
+    }
+    let robot = w.agent_id("pr2").unwrap();
+    for o in w.object_ids() {
+        assert!(
+            w.attachment(o).is_none_or(|at| at.agent != robot),
+            "the robot still holds {}",
+            w.object(o).name
+        );
+    }
+}
+
 /// Section III: a small cluttered desk with room to make one big book accessible, not both; a
 /// book made accessible also blocks showing the other. Geometric-first backtracking tries other
 /// placements of the first book, then HTN alternatives, and ends giving the first book directly
@@ -297,6 +326,7 @@ fn section_iii_cluttered_desk_backtracks_geometrically_then_symbolically() {
     assert_eq!(a.iter().filter(|n| *n == "givebk").count(), 1, "{a:?}");
     assert_literals_flow(&r);
     assert_trajectories_recheck(&r);
+    assert_taken_books_in_hand(&r);
     // Chronological backtracking solves it too, revisiting geometric and HTN choices.
     let c = run(
         "domain-compound.hddl",
