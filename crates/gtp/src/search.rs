@@ -2008,12 +2008,12 @@ impl Search {
         let shape_pose = world.object_shape_pose(o);
         let gripper = Gripper::new(ch.grasp.opening);
         let straddle = |qa: &[f32]| !gripper.intersects(&open.tool_pose(qa), &*shape, &shape_pose);
-        // Back along the gripper, else towards the robot, else up: the first that is free.
+        // Straight back along the gripper, else towards the robot, else up: the first that is
+        // free. Back along the gripper the fingers slide off the object, which the human holds
+        // now (they may brush it); the other ways must stay clear of it.
         let tool = open.tool_pose(&q0);
         let mut home = world.agent_state(setup.agent).base.translation - tool.translation;
         home.z = 0.0;
-        // Back along the gripper the fingers slide off the object, which the human holds now
-        // (they may brush it); the other ways must stay clear of it.
         let ways = [
             (tool.rotation * Vector::X * -1.0, false),
             (home.normalize_or_zero(), true),
@@ -2026,7 +2026,6 @@ impl Search {
         let mut last = String::new();
         let mut retreat = None;
         for (way, clear) in ways.iter().filter(|(w, _)| w.length() > 0.5) {
-            self.stats.planner_calls += 1;
             let extra: &dyn Fn(&[f32]) -> bool = if *clear { &straddle } else { &free };
             let r = open.straight(
                 &q0,
