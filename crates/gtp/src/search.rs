@@ -128,6 +128,8 @@ pub(crate) struct Search {
     rejections: HashMap<Stage, usize>,
     best_visibility: Option<f32>,
     last_reason: String,
+    /// The last reason a grasp could not be picked up.
+    pick_reason: String,
     pub(crate) failure: Option<Failure>,
     done: bool,
 }
@@ -306,6 +308,7 @@ impl Search {
             rejections: HashMap::new(),
             best_visibility: None,
             last_reason: String::new(),
+            pick_reason: String::new(),
             failure: None,
             done: false,
         })
@@ -313,18 +316,22 @@ impl Search {
 
     fn reject(&mut self, stage: Stage, reason: impl FnOnce() -> String) {
         *self.rejections.entry(stage).or_default() += 1;
-        if self.cfg.trace {
-            let r = reason();
-            eprintln!("reject {stage:?}: {r}");
-            if self.deepest.is_none_or(|d| stage >= d) {
-                self.deepest = Some(stage);
-                self.last_reason = r;
-            }
+        let deepest = self.deepest.is_none_or(|d| stage >= d);
+        // The reason is worded only when it may be reported: the deepest stage's, a pick's
+        // (given when no grasp can be picked up at all), or every one when tracing.
+        if !(deepest || stage == Stage::Pick || self.cfg.trace) {
             return;
         }
-        if self.deepest.is_none_or(|d| stage >= d) {
+        let r = reason();
+        if self.cfg.trace {
+            eprintln!("reject {stage:?}: {r}");
+        }
+        if stage == Stage::Pick {
+            self.pick_reason.clone_from(&r);
+        }
+        if deepest {
             self.deepest = Some(stage);
-            self.last_reason = reason();
+            self.last_reason = r;
         }
     }
 
@@ -422,6 +429,29 @@ impl Search {
                         self.object_name(),
                         self.busy_arms.join(", ")
                     ),
+                    limit: false,
+                });
+                return None;
+            }
+            if !self.choices.is_empty() && self.failed_choices.len() == self.choices.len() {
+                // Every grasp failed for good (no pick, no approach, a carry that cannot
+                // start): no point, orientation or level can change that.
+                self.failure = Some(Failure {
+                    constraint: "pick".into(),
+                    message: if self.held {
+                        format!(
+                            "the held `{}` cannot be carried ({})",
+                            self.object_name(),
+                            self.last_reason
+                        )
+                    } else {
+                        format!(
+                            "no grasp of `{}` can be picked up ({} tried; the last: {})",
+                            self.object_name(),
+                            self.choices.len(),
+                            self.pick_reason
+                        )
+                    },
                     limit: false,
                 });
                 return None;

@@ -553,3 +553,30 @@ fn a_pick_with_both_grippers_full_says_so() {
     assert_eq!(f.constraint, "gripper");
     assert!(f.message.contains("holds `grey-book`"), "{}", f.message);
 }
+
+/// An object no grasp can pick up where it lies (the cluttered desk's second big book at the
+/// start: out of reach, or the gripper hits what is around it): the search stops after the
+/// first point, where every grasp was tried, and says the pick stopped it (not the deepest
+/// stage some candidate reached).
+#[test]
+fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
+    let world = World::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../domains/library/cluttered-desk.toml"
+    ))
+    .unwrap();
+    let planner = Planner::new();
+    let mut stream = planner
+        .run(
+            &world,
+            "show",
+            &["big-book-2", "member"],
+            &CallOptions::seeded(1),
+        )
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert_eq!(f.constraint, "pick", "{f}");
+    assert!(f.message.contains("can be picked up"), "{f}");
+    assert_eq!(stream.stats().points, 1);
+}
