@@ -1163,11 +1163,12 @@ impl Search {
             }
         };
         // Approach: straight back from the grasp, the gripper checked against the object.
-        let shape = self.world.object(o).shape.clone();
-        let shape_pose = self.world.object_shape_pose(o);
-        let gripper = Gripper::new(ch.grasp.opening);
-        let straddle =
-            |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+        let straddle = straddles(
+            &open_wo,
+            ch.grasp.opening,
+            self.world.object(o).shape.clone(),
+            self.world.object_shape_pose(o),
+        );
         // The grasp configuration itself is the approach's start, which the straight move
         // takes as checked: the open gripper there must not touch the object either.
         if !straddle(&qg) {
@@ -1534,11 +1535,12 @@ impl Search {
                     ch.grasp.opening,
                 )
                 .ok()?;
-            let shape = self.world.object(o).shape.clone();
-            let shape_pose = orient.pose * self.world.object(o).shape_offset;
-            let gripper = Gripper::new(ch.grasp.opening);
-            let straddle =
-                |qa: &[f32]| !gripper.intersects(&open_wo.tool_pose(qa), &*shape, &shape_pose);
+            let straddle = straddles(
+                &open_wo,
+                ch.grasp.opening,
+                self.world.object(o).shape.clone(),
+                orient.pose * self.world.object(o).shape_offset,
+            );
             let back = tool.rotation * Vector::X * (-self.c.approach);
             let retreat = self.or_reject(
                 open_wo.straight(
@@ -2034,10 +2036,12 @@ impl Search {
                 ch.grasp.opening,
             )
             .ok()?;
-        let shape = world.object(o).shape.clone();
-        let shape_pose = world.object_shape_pose(o);
-        let gripper = Gripper::new(ch.grasp.opening);
-        let straddle = |qa: &[f32]| !gripper.intersects(&open.tool_pose(qa), &*shape, &shape_pose);
+        let straddle = straddles(
+            &open,
+            ch.grasp.opening,
+            world.object(o).shape.clone(),
+            world.object_shape_pose(o),
+        );
         // Straight back along the gripper, else towards the robot, else up: the first that is
         // free. Back along the gripper the fingers slide off the object, which the human holds
         // now (they may brush it); the other ways must stay clear of it.
@@ -2436,6 +2440,18 @@ impl Search {
             limit: false,
         }
     }
+}
+
+/// A check on `motion`'s arm values: the gripper, open by `opening`, does not touch `shape` at
+/// `pose` (the object it straddles while it moves in or out around it).
+fn straddles<'a>(
+    motion: &'a ArmMotion<'_>,
+    opening: f32,
+    shape: parry3d::shape::SharedShape,
+    pose: Pose,
+) -> impl Fn(&[f32]) -> bool + 'a {
+    let gripper = Gripper::new(opening);
+    move |qa: &[f32]| !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
 }
 
 /// Visibility of object `o` for human `h` in `world` at effort `level`: the head as it is
