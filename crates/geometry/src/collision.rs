@@ -609,8 +609,11 @@ impl fmt::Display for Contact {
 enum Hit {
     SelfPair(usize, usize),
     Obstacle(usize, usize),
-    HeldObstacle(usize),
-    HeldShape(usize),
+    /// Held object `k` (0: the one of [`CollisionChecker::set_held_object`], then the others in
+    /// the order added) against obstacle `o`.
+    HeldObstacle(usize, usize),
+    /// Held object `k` against shape `i` of the agent.
+    HeldShape(usize, usize),
 }
 
 /// Per-thread buffers so that checks do not allocate.
@@ -634,6 +637,8 @@ pub struct CollisionChecker {
     obstacles: Arc<StaticObstacles>,
     base: Pose,
     held: Option<HeldObject>,
+    /// Objects held in the agent's other hands (see [`CollisionChecker::add_other_held_object`]).
+    other_held: Vec<HeldObject>,
     self_collision: bool,
     fixed: Option<Arc<FixedJoints>>,
 }
@@ -678,6 +683,7 @@ impl CollisionChecker {
             obstacles,
             base,
             held: None,
+            other_held: Vec::new(),
             self_collision: true,
             fixed: None,
         }
@@ -735,7 +741,7 @@ impl CollisionChecker {
             let unmoving = match h {
                 Hit::SelfPair(a, b) => !moving(a as u16) && !moving(b as u16),
                 Hit::Obstacle(s, _) => !moving(s as u16),
-                Hit::HeldObstacle(_) | Hit::HeldShape(_) => false,
+                Hit::HeldObstacle(..) | Hit::HeldShape(..) => false,
             };
             if unmoving {
                 static_hits.push(h);
@@ -791,6 +797,22 @@ impl CollisionChecker {
             );
         }
         self.held = held;
+    }
+
+    /// Adds an object held in another hand of the agent (a second gripper's): checked like the
+    /// held object, against the scene and every link but its own hand's, so that a moving arm
+    /// does not pass through what the other arm holds.
+    ///
+    /// # Panics
+    /// If `held` was made for another agent model.
+    pub fn add_other_held_object(&mut self, held: HeldObject) {
+        assert!(
+            held.touching.len() == self.agent.model.links().len(),
+            "held object '{}' was made for another agent model than '{}'",
+            held.name,
+            self.agent.model.name()
+        );
+        self.other_held.push(held);
     }
 
     /// Turns self-collision checks on or off (on by default).
@@ -866,9 +888,11 @@ impl CollisionChecker {
     fn contact(&self, h: Hit) -> Contact {
         let links = self.agent.model.links();
         let shape_link = |s: usize| links[self.agent.shapes[s].link].name.clone();
-        let held = || {
+        let held = |k: usize| {
             self.held
-                .as_ref()
+                .iter()
+                .chain(&self.other_held)
+                .nth(k)
                 .map(|o| o.name.clone())
                 .unwrap_or_default()
         };
@@ -881,12 +905,12 @@ impl CollisionChecker {
                 link: shape_link(s),
                 obstacle: self.obstacles.obstacles[o].name.clone(),
             },
-            Hit::HeldObstacle(o) => Contact::HeldObstacle {
-                object: held(),
+            Hit::HeldObstacle(k, o) => Contact::HeldObstacle {
+                object: held(k),
                 obstacle: self.obstacles.obstacles[o].name.clone(),
             },
-            Hit::HeldShape(s) => Contact::HeldLink {
-                object: held(),
+            Hit::HeldShape(k, s) => Contact::HeldLink {
+                object: held(k),
                 link: shape_link(s),
             },
         }
@@ -993,13 +1017,13 @@ impl CollisionChecker {
                     }
                 }
             }
-            // The held object against the scene and the agent.
-            if let Some(held) = &self.held {
+            // The held objects against the scene and the agent.
+            for (k, held) in self.held.iter().chain(&self.other_held).enumerate() {
                 let p = links[held.link] * held.grasp;
                 let aabb = held.shape.compute_aabb(&p);
-                let stop = self
-                    .obstacles
-                    .for_each_hit(&p, &*held.shape.0, &aabb, |o| report(Hit::HeldObstacle(o)));
+                let stop = self.obstacles.for_each_hit(&p, &*held.shape.0, &aabb, |o| {
+                    report(Hit::HeldObstacle(k, o))
+                });
                 if stop {
                     return;
                 }
@@ -1015,7 +1039,7 @@ impl CollisionChecker {
                         continue;
                     }
                     if intersects(&poses[i], &*s.shape.0, &p, &*held.shape.0)
-                        && report(Hit::HeldShape(i))
+                        && report(Hit::HeldShape(k, i))
                     {
                         return;
                     }

@@ -358,3 +358,56 @@ fn fixed_joints_cache_gives_the_same_answers() {
     }
     assert!(free > 20, "free {free}");
 }
+
+/// An object in the other gripper is in the moving arm's way: the right gripper meets a book
+/// the left gripper holds out in front of it, with or without the fixed-joints cache; the
+/// left gripper itself may touch its book.
+#[test]
+fn what_the_other_gripper_holds_blocks_the_moving_arm() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let q = model.default_configuration().into_vec();
+    let left = model
+        .link_pose(Pose::IDENTITY, &q, "l_gripper_tool_frame")
+        .unwrap();
+    let book = SharedShape::cuboid(0.1, 0.07, 0.03);
+    let in_hand = HeldObject::new(
+        &model,
+        "book",
+        book.clone(),
+        "l_gripper_tool_frame",
+        Pose::IDENTITY,
+    )
+    .unwrap();
+    let mut c = CollisionChecker::new(
+        m.clone(),
+        Arc::new(StaticObstacles::empty()),
+        Pose::IDENTITY,
+    );
+    c.add_other_held_object(in_hand);
+    assert!(c.is_config_free(&q), "{:?}", c.collisions(&q));
+    // The same book held out where the right gripper is.
+    let out = HeldObject::new(
+        &model,
+        "book",
+        book,
+        "l_gripper_tool_frame",
+        left.inverse() * Pose::from_translation(R_TOOL),
+    )
+    .unwrap();
+    let mut c = CollisionChecker::new(
+        m.clone(),
+        Arc::new(StaticObstacles::empty()),
+        Pose::IDENTITY,
+    );
+    c.add_other_held_object(out);
+    let hit = |c: &CollisionChecker| {
+        c.collisions(&q).into_iter().any(|k| {
+            matches!(k, Contact::HeldLink { ref object, ref link } if object == "book" && link.starts_with("r_gripper"))
+        })
+    };
+    assert!(hit(&c), "{:?}", c.collisions(&q));
+    let mut fast = c.clone();
+    fast.set_fixed_joints(&q, &model.chain("right_arm").unwrap().dofs);
+    assert!(hit(&fast) && !fast.is_config_free(&q));
+}

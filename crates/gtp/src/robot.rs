@@ -274,8 +274,6 @@ pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
     }
 }
 
-/// A held object for collision checks: `object` attached to the arm's tool frame at `grasp`
-/// (the object's shape pose in the tool frame).
 /// The object the robot carries in one of its grippers, if any, as a held object for its
 /// collision checks (the base's drives must carry it round obstacles too). With an object in
 /// each gripper, the first arm's.
@@ -291,6 +289,31 @@ pub fn carried(world: &World, setup: &RobotSetup) -> Result<Option<HeldObject>, 
     Ok(None)
 }
 
+/// The objects the robot holds in the grippers of arms other than `arm`, as held objects for
+/// `arm`'s collision checks: they stay where they are while `arm` moves, which must not pass
+/// through them.
+pub fn held_elsewhere(
+    world: &World,
+    setup: &RobotSetup,
+    arm: &Arm,
+) -> Result<Vec<HeldObject>, String> {
+    let mut out = Vec::new();
+    for o in world.object_ids() {
+        let Some(att) = world.attachment(o).filter(|a| a.agent == setup.agent) else {
+            continue;
+        };
+        if att.link == arm.tool_link {
+            continue;
+        }
+        if let Some(other) = setup.arms.iter().find(|a| a.tool_link == att.link) {
+            out.push(held_object(world, setup, other, o, att.grasp)?);
+        }
+    }
+    Ok(out)
+}
+
+/// A held object for collision checks: `object` attached to the arm's tool frame at
+/// `object_in_tool` (the object's pose in the tool frame).
 pub fn held_object(
     world: &World,
     setup: &RobotSetup,

@@ -1009,14 +1009,18 @@ impl Search {
         };
         let mut template = self.q0_full.clone();
         set_opening(&setup.model, a, &mut template, opening);
-        Ok(ArmMotion::new(
+        let mut m = ArmMotion::new(
             setup,
             a,
             obstacles,
             held,
             self.world.agent_state(setup.agent).base,
             template,
-        ))
+        );
+        for h in robot::held_elsewhere(&self.world, setup, a)? {
+            m.checker.add_other_held_object(h);
+        }
+        Ok(m)
     }
 
     /// Whether `arm` may reach an object at point `p` at all (its tool within the arm's reach

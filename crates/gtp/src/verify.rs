@@ -114,6 +114,12 @@ pub fn recheck_trajectories(
             c.set_held_object(held);
             checkers.push(c);
         }
+        // What the other grippers hold stays where it is, in the arm's way.
+        for c in &mut checkers {
+            for h in robot::held_elsewhere(&w, &setup, arm)? {
+                c.add_other_held_object(h);
+            }
+        }
         let mut q = w.agent_state(robot_id).q.clone();
         set_opening(&setup.model, arm, &mut q, t.gripper_opening);
         let straddled = match (&t.straddles, object) {
