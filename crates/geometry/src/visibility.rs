@@ -156,10 +156,6 @@ pub fn visibility_from_upto(
         }
     }
 
-    // A ray counts when it hits the target, lies inside the field of view and no occluder
-    // cuts it first. Neighbouring rays are mostly cut by the same body: the last one that
-    // blocked is tried first (the verdict of each ray does not depend on the order of the
-    // tests).
     // One convex occluder in front of the whole target (it cuts the four corner rays of the
     // grid nearer than any point of the target's bounds) cuts every ray of the grid: each is a
     // positive combination of the corner rays, so it meets the convex hull of the four corner
@@ -193,6 +189,10 @@ pub fn visibility_from_upto(
         return Visibility { shown: 0, ideal };
     }
 
+    // A ray counts when it hits the target, lies inside the field of view and no occluder
+    // cuts it first. Neighbouring rays are mostly cut by the same body: the last one that
+    // blocked is tried first (the verdict of each ray does not depend on the order of the
+    // tests).
     let inv_eye = eye.rotation.inverse();
     let (tx, ty) = ((0.5 * fov[0]).tan(), (0.5 * fov[1]).tan());
     // With an early stop: shown rays beyond which the fraction exceeds `stop_above` whatever
@@ -247,8 +247,6 @@ struct Occluder<'a> {
 }
 
 impl Occluder<'_> {
-    /// Whether it cuts `ray` before `toi` (a part is tested in the compound's frame and counted
-    /// as the compound itself counts its parts).
     /// Where `ray` first meets it (solid: 0 from inside), in the ray's units.
     fn first_hit(&self, ray: &Ray) -> Option<f32> {
         match &self.part {
@@ -260,6 +258,8 @@ impl Occluder<'_> {
         }
     }
 
+    /// Whether it cuts `ray` before `toi` (a part is tested in the compound's frame and counted
+    /// as the compound itself counts its parts).
     fn blocks(&self, ray: &Ray, toi: f32) -> bool {
         if !self.aabb.intersects_local_ray(ray, toi) {
             return false;
