@@ -1996,8 +1996,8 @@ impl Search {
     // ---- take -------------------------------------------------------------------------------
 
     /// `take(o, h)`: one solution. The human must reach the object where the robot holds it
-    /// out; the robot then opens its gripper and draws it straight back, the object left in
-    /// the human's nearest hand (which keeps it: it moves there, out of the workspace).
+    /// out; the robot then opens its gripper and draws it back (straight, else planned). The
+    /// object goes to the human's nearest free hand, which keeps it there, out of the way.
     fn next_take(&mut self) -> Option<Solution> {
         let (o, h) = (self.object?, self.human?);
         let oname = self.object_name();
