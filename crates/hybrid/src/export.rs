@@ -140,7 +140,12 @@ fn link_poses_json(world: &World, agent: geometry::scene::AgentId, poses: &[Pose
 /// The frames of one trajectory, starting from the agent's configuration in `world`: every
 /// link's pose and the held object's pose per frame. Returns the world with the agent at the
 /// trajectory's end.
-fn trajectory_json(world: &World, t: &Trajectory, tool_link: Option<usize>) -> (Value, World) {
+/// The gripper moves to the trajectory's opening over its first frames (from where the world
+/// has it), so that frames join up across trajectories and steps.
+const GRIPPER_FRAMES: usize = 5;
+
+fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>) -> (Value, World) {
+    let tool_link = arm.map(|a| a.tool_link);
     let mut world = world.clone();
     let Some(agent) = world.agent_id(&t.agent) else {
         return (Value::Null, world);
@@ -174,9 +179,19 @@ fn trajectory_json(world: &World, t: &Trajectory, tool_link: Option<usize>) -> (
         points.push(last.clone());
     }
     let mut frames = Vec::with_capacity(points.len());
-    for p in &points {
+    // The gripper's joint: from its value in the world to the trajectory's opening.
+    let gripper = arm.and_then(|a| a.gripper_dof).map(|k| {
+        let from = world.agent_state(agent).q[k];
+        let to = model.dof_limits()[k].clamp(t.gripper_opening / 2.0);
+        (k, from, to)
+    });
+    for (j, p) in points.iter().enumerate() {
         let state = world.agent_state(agent);
         let (mut base, mut q) = (state.base, state.q.clone());
+        if let Some((k, from, to)) = gripper {
+            let s = (j as f32 / GRIPPER_FRAMES as f32).min(1.0);
+            q[k] = from + (to - from) * s;
+        }
         let (mut bx, mut by, mut byaw) = (base.translation.x, base.translation.y, None);
         for (i, v) in p.iter().enumerate() {
             match (
@@ -244,19 +259,32 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
                 let mut trajectories = Vec::new();
                 if let Some(s) = &summary {
                     for t in &s.trajectories {
-                        let tool = robot.as_ref().and_then(|r| {
-                            r.arms
-                                .iter()
-                                .find(|arm| arm.name == t.arm)
-                                .map(|arm| arm.tool_link)
-                        });
-                        let (v, after) = trajectory_json(&world, t, tool);
+                        let arm = robot
+                            .as_ref()
+                            .and_then(|r| r.arms.iter().find(|arm| arm.name == t.arm));
+                        let (v, after) = trajectory_json(&world, t, arm);
                         trajectories.push(v);
                         world = after;
                     }
                 }
                 if let Some(after) = run.oracle.solution_world(&g.payload) {
+                    // The solution's world, with the grippers as the trajectories left them.
+                    let fingers: Vec<(geometry::scene::AgentId, usize, f32)> = robot
+                        .iter()
+                        .flat_map(|r| {
+                            r.arms.iter().filter_map(|a| {
+                                a.gripper_dof
+                                    .map(|k| (r.agent, k, world.agent_state(r.agent).q[k]))
+                            })
+                        })
+                        .collect();
                     world = after.clone();
+                    for (agent, k, v) in fingers {
+                        let st = world.agent_state(agent);
+                        let (base, mut q) = (st.base, st.q.clone());
+                        q[k] = v;
+                        world.set_agent_config(agent, base, &q);
+                    }
                     for id in world.object_ids() {
                         let o = world.object(id);
                         if o.movable {

@@ -269,6 +269,35 @@ fn backtracks(run: &Run) -> (u64, u64) {
     )
 }
 
+/// In the plan JSON, every trajectory starts where the one before it (in its step or an
+/// earlier one) left its agent's links: nothing jumps between frames, the grippers included
+/// (a gripper opens or closes over a trajectory's first frames).
+fn assert_frames_join(run: &Run) {
+    let v = hybrid::export::plan_json(run, "library", "plan");
+    let mut last: std::collections::HashMap<String, serde_json::Value> = Default::default();
+    for s in v["steps"].as_array().unwrap() {
+        for t in s["gtp"]["trajectories"].as_array().into_iter().flatten() {
+            let agent = t["agent"].as_str().unwrap().to_string();
+            let frames = t["frames"].as_array().unwrap();
+            if let Some(prev) = last.get(&agent) {
+                for (link, pose) in frames[0]["link_poses"].as_object().unwrap() {
+                    let (a, b) = (&prev[link]["t"], &pose["t"]);
+                    let d: f64 = (0..3)
+                        .map(|k| (a[k].as_f64().unwrap() - b[k].as_f64().unwrap()).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    assert!(
+                        d < 1e-3,
+                        "step {}: {agent}/{link} jumps {d:.3} m",
+                        s["index"]
+                    );
+                }
+            }
+            last.insert(agent, frames.last().unwrap()["link_poses"].clone());
+        }
+    }
+}
+
 /// WAITTAKE's geometric side: every book handed over ends in one of the member's hands, and
 /// the robot's grippers hold nothing in the end.
 fn assert_taken_books_in_hand(run: &Run) {
@@ -327,6 +356,7 @@ fn section_iii_cluttered_desk_backtracks_geometrically_then_symbolically() {
     assert_literals_flow(&r);
     assert_trajectories_recheck(&r);
     assert_taken_books_in_hand(&r);
+    assert_frames_join(&r);
     // Chronological backtracking solves it too, revisiting geometric and HTN choices.
     let c = run(
         "domain-compound.hddl",
