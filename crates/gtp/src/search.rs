@@ -2082,41 +2082,47 @@ impl Search {
                 Err(e) => last = e,
             }
         }
-        // No straight way (an arm near its joint limits): the arm planned back to where the
-        // gripper is drawn back along itself, the object an obstacle where the human holds it.
+        // No straight way (an arm near its joint limits, or in a tight spot): the arm planned to
+        // where the gripper is drawn back each of those ways, the object an obstacle where the
+        // human holds it.
         if retreat.is_none() {
-            let back = Pose::from_parts(
-                tool.translation - tool.rotation * Vector::X * self.c.approach,
-                tool.rotation,
-            );
+            // The object let go: an obstacle (the robot's own held objects are none).
+            let mut released = world.clone();
+            released.detach(o);
+            let with_object = Arc::new(robot::near(
+                &robot::obstacles(&released, setup.agent, &[]),
+                self.workspace.0,
+                self.workspace.1,
+            ));
             let clear_all = self
-                .motion(
-                    &setup,
-                    ch.arm,
-                    self.obstacles_all.clone(),
-                    None,
-                    ch.grasp.opening,
-                )
+                .motion(&setup, ch.arm, with_object, None, ch.grasp.opening)
                 .ok()?;
             let any = |_: &[f32]| true;
-            self.stats.ik_calls += 1;
-            match clear_all.ik_free(
-                back,
-                &q0,
-                self.cfg.ik_tries,
-                self.cfg.ik_attempts,
-                &any,
-                &mut rng,
-            ) {
-                Ok(q_back) => {
-                    self.stats.planner_calls += 1;
-                    match clear_all.plan(&q0, &q_back, &rrt, &mut rng) {
-                        Ok((p, _)) => retreat = Some((p, true)),
-                        Err(e) => last = e.to_string(),
+            for (way, _) in ways.iter().filter(|(w, _)| w.length() > 0.5) {
+                let back =
+                    Pose::from_parts(tool.translation + *way * self.c.approach, tool.rotation);
+                self.stats.ik_calls += 1;
+                match clear_all.ik_free(
+                    back,
+                    &q0,
+                    2 * self.cfg.ik_tries,
+                    self.cfg.ik_attempts,
+                    &any,
+                    &mut rng,
+                ) {
+                    Ok(q_back) => {
+                        self.stats.planner_calls += 1;
+                        match clear_all.plan(&q0, &q_back, &rrt, &mut rng) {
+                            Ok((p, _)) => {
+                                retreat = Some((p, true));
+                                break;
+                            }
+                            Err(e) => last = e.to_string(),
+                        }
                     }
-                }
-                Err(e) => {
-                    last = e.unwrap_or_else(|| "no inverse kinematics drawn back".into());
+                    Err(e) => {
+                        last = e.unwrap_or_else(|| "no inverse kinematics drawn back".into());
+                    }
                 }
             }
         }
@@ -2160,6 +2166,45 @@ impl Search {
             });
             return None;
         };
+        // The person's arm out to the object and back with it, when the hand is free and its
+        // inverse kinematics reaches the object from where the person is (the reach test above
+        // may have leant or turned them): shown, not planned (people are not steered).
+        let hmodel = world.agent(h).model.clone();
+        let hbase = world.agent_state(h).base;
+        let qh0 = world.agent_state(h).q.clone();
+        let reach = ["right_arm", "left_arm"]
+            .iter()
+            .filter_map(|n| hmodel.chain(n).ok())
+            .find(|c| c.tip_link == hand)
+            .filter(|_| in_hand(hand).is_empty())
+            .and_then(|c| {
+                let root = hmodel.link_pose_by_id(hbase, &qh0, c.root_link).translation;
+                let point = world
+                    .object(o)
+                    .shape
+                    .project_point(&world.object_shape_pose(o), root, true)
+                    .point;
+                let opts = geometry::ik::IkOptions {
+                    attempts: 4,
+                    iterations: 80,
+                    position_tolerance: 0.01,
+                    orientation_tolerance: 1.0,
+                    orientation: false,
+                };
+                geometry::ik::solve_ik(
+                    &hmodel,
+                    &c,
+                    hbase,
+                    &qh0,
+                    Pose::from_translation(point),
+                    &opts,
+                    &mut rng,
+                )
+                .ok()
+                .map(|s| (c, s.configuration))
+            });
+        // The object rests on the hand as the person holds it, on what the hand already
+        // holds; the person's withdraw carries it there from the hand-over.
         let hand_pose = poses[hand];
         let below: f32 = in_hand(hand)
             .iter()
@@ -2168,15 +2213,17 @@ impl Search {
                 b.maxs.z - b.mins.z
             })
             .sum();
-        let rotation = world.object_pose(o).rotation;
         let half = {
             let b = world.object_aabb(o);
             (b.maxs.z - b.mins.z) / 2.0
         };
-        let held_at =
-            Pose::from_parts(hand_pose.translation + Vector::Z * (below + half), rotation);
-        after.attach_with_grasp(o, h, hand, hand_pose.inverse() * held_at);
-        let trajectories = vec![self.trajectory(
+        let held_at = Pose::from_parts(
+            hand_pose.translation + Vector::Z * (below + half),
+            world.object_pose(o).rotation,
+        );
+        let grasp = hand_pose.inverse() * held_at;
+        after.attach_with_grasp(o, h, hand, grasp);
+        let retreat = self.trajectory(
             Phase::Retreat,
             arm,
             retreat,
@@ -2184,10 +2231,53 @@ impl Search {
             ch.grasp.opening,
             vec![oname.clone()],
             clear.then(|| (oname.clone(), world.object_pose(o))),
-        )];
-        // In the hand: reached at level 0 now.
-        let reach_effort = Some(0);
-        Some(Solution {
+        );
+        let Some((chain, qr)) = reach else {
+            return Some(self.take_solution(after, level, vec![retreat]));
+        };
+        let values = |q: &[f32]| chain.dofs.iter().map(|&k| q[k]).collect::<Vec<f32>>();
+        let (a, b) = (values(&qh0), values(&qr));
+        let length = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f32>()
+            .sqrt();
+        let human_motion = |phase, waypoints, held| Trajectory {
+            phase,
+            agent: hname.clone(),
+            arm: chain.name.clone(),
+            joints: chain
+                .dofs
+                .iter()
+                .map(|&k| hmodel.dof_names()[k].clone())
+                .collect(),
+            length,
+            waypoints,
+            held,
+            gripper_opening: 0.0,
+            ignored: vec![],
+            straddles: None,
+        };
+        let trajectories = vec![
+            human_motion(Phase::Reach, vec![a.clone(), b.clone()], None),
+            retreat,
+            human_motion(
+                Phase::Withdraw,
+                vec![b, a],
+                Some(HeldRecord {
+                    object: oname.clone(),
+                    object_in_tool: grasp.into(),
+                }),
+            ),
+        ];
+        Some(self.take_solution(after, level, trajectories))
+    }
+
+    /// A take's solution: the world after it, the effort at which the human reached the
+    /// object, the motions.
+    fn take_solution(&self, after: World, level: u8, trajectories: Vec<Trajectory>) -> Solution {
+        Solution {
             world: after,
             summary: SolutionSummary {
                 task: self.task.kind,
@@ -2197,12 +2287,13 @@ impl Search {
                 grasp: None,
                 placement: None,
                 visibility: None,
-                reach_effort,
+                // In the hand: reached at level 0 now.
+                reach_effort: Some(0),
                 robot_base: None,
                 trajectories,
                 stats: self.stats,
             },
-        })
+        }
     }
 
     // ---- navigate-to ---------------------------------------------------------------------

@@ -57,6 +57,10 @@ pub enum Phase {
     Return,
     /// The robot's base driving on the floor (navigate-to).
     Drive,
+    /// A person's hand out to an object the robot holds out (take; shown, not planned).
+    Reach,
+    /// The person's hand back with the object taken (take; shown, not planned).
+    Withdraw,
 }
 
 /// An object carried during a motion.
@@ -78,7 +82,7 @@ pub struct HeldRecord {
 pub struct Trajectory {
     /// What this motion does.
     pub phase: Phase,
-    /// The agent moving (the robot's name).
+    /// The agent moving (the robot's name; the human's for a take's reach and withdraw).
     pub agent: String,
     /// The arm (`right_arm`, `left_arm`), or `base` for a drive.
     pub arm: String,

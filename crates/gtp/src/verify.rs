@@ -34,6 +34,11 @@ pub fn recheck_trajectories(
         let at = |k: usize, why: String| {
             format!("trajectory {ti} ({:?}), configuration {k}: {why}", t.phase)
         };
+        // A person's motions (a take's reach and withdraw) are shown, not planned: nothing to
+        // re-check against the robot's model.
+        if t.agent != before.agent(robot_id).name() {
+            continue;
+        }
         if t.phase == Phase::Drive {
             let q = w.agent_state(robot_id).q.clone();
             let obstacles = Arc::new(robot::obstacles(&w, robot_id, &[]));

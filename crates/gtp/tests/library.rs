@@ -7,6 +7,7 @@ use geometry::scene::{AgentId, ObjectId};
 use geometry::visibility::{Aim, visibility_for_agent};
 use geometry::world::World;
 use gtp::planner::{CallOptions, GtpError, Planner, Solution};
+use gtp::solution::Phase;
 use gtp::verify::recheck_trajectories;
 
 fn library() -> World {
@@ -522,6 +523,35 @@ fn the_member_takes_a_given_book_and_the_gripper_is_free_again() {
     let at = taken.world.attachment(book).expect("the book is held");
     assert_eq!(at.agent, member);
     assert!(world.agent(member).hand_links.contains(&at.link));
+    // The member's arm goes out to the book and comes back with it, to where it was.
+    let phases: Vec<(String, Phase)> = taken
+        .summary
+        .trajectories
+        .iter()
+        .map(|t| (t.agent.clone(), t.phase))
+        .collect();
+    assert_eq!(
+        phases,
+        [
+            ("member".to_string(), Phase::Reach),
+            ("pr2".to_string(), Phase::Retreat),
+            ("member".to_string(), Phase::Withdraw)
+        ]
+    );
+    let withdraw = &taken.summary.trajectories[2];
+    assert_eq!(withdraw.held.as_ref().unwrap().object, "grey-book");
+    assert_eq!(
+        withdraw.waypoints.first(),
+        taken.summary.trajectories[0].waypoints.last()
+    );
+    assert_eq!(
+        withdraw.waypoints.last(),
+        taken.summary.trajectories[0].waypoints.first()
+    );
+    assert_eq!(
+        taken.world.agent_state(member).q,
+        given.world.agent_state(member).q
+    );
     // The book is an obstacle in the member's hand now, and the gripper can pick again.
     let next = first(&planner, &taken.world, "pick", &["white-book"]);
     recheck(&planner, &taken.world, &next);

@@ -145,12 +145,16 @@ fn link_poses_json(world: &World, agent: geometry::scene::AgentId, poses: &[Pose
 const GRIPPER_FRAMES: usize = 5;
 
 fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>) -> (Value, World) {
-    let tool_link = arm.map(|a| a.tool_link);
     let mut world = world.clone();
     let Some(agent) = world.agent_id(&t.agent) else {
         return (Value::Null, world);
     };
     let model = world.agent(agent).model.clone();
+    // What a held object follows: the robot arm's tool frame, else the tip of the agent's chain
+    // of that name (a person's hand).
+    let tool_link = arm
+        .map(|a| a.tool_link)
+        .or_else(|| model.chain(&t.arm).ok().map(|c| c.tip_link));
     let dof: Vec<Option<usize>> = t
         .joints
         .iter()
@@ -261,6 +265,7 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
                     for t in &s.trajectories {
                         let arm = robot
                             .as_ref()
+                            .filter(|r| world.agent(r.agent).name() == t.agent)
                             .and_then(|r| r.arms.iter().find(|arm| arm.name == t.arm));
                         let (v, after) = trajectory_json(&world, t, arm);
                         trajectories.push(v);
