@@ -2167,8 +2167,8 @@ impl Search {
             return None;
         };
         // The person's arm out to the object and back with it, when the hand is free and its
-        // inverse kinematics reaches the object from where the person is (the reach test above
-        // may have leant or turned them): shown, not planned (people are not steered).
+        // inverse kinematics reaches the object from the person's posture now (the reach test
+        // above may have counted a lean or a step): shown, not planned (people are not steered).
         let hmodel = world.agent(h).model.clone();
         let hbase = world.agent_state(h).base;
         let qh0 = world.agent_state(h).q.clone();
