@@ -23,6 +23,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
 use serde::Serialize;
 
+use crate::agent::KinematicChain;
 use crate::effort::{MAX_EFFORT, aim_head, shoulders, stances};
 use crate::ik::{IkOptions, solve_ik};
 use crate::scene::{AgentId, AgentKind, ObjectId};
@@ -182,6 +183,27 @@ pub fn reachable_effort(
 /// hand frame on the object's surface point nearest the arm's root, from this stance.
 fn ik_confirms(world: &World, agent: AgentId, base: Pose, q: &[f32], object: ObjectId) -> bool {
     let model = &world.agent(agent).model;
+    let mut rng = fastrand::Rng::with_seed(0x5eed);
+    ["right_arm", "left_arm"].iter().any(|name| {
+        model
+            .chain(name)
+            .is_ok_and(|chain| arm_reach(world, agent, &chain, base, q, object, &mut rng).is_some())
+    })
+}
+
+/// The agent's configuration with arm `chain` reaching `object` from the stance `base`, `q`:
+/// its tip (the hand frame) on the object's surface point nearest the arm's root, by inverse
+/// kinematics of the position alone. `None` when the arm does not get there.
+pub fn arm_reach(
+    world: &World,
+    agent: AgentId,
+    chain: &KinematicChain,
+    base: Pose,
+    q: &[f32],
+    object: ObjectId,
+    rng: &mut fastrand::Rng,
+) -> Option<Vec<f32>> {
+    let model = &world.agent(agent).model;
     let obj = world.object(object);
     let pose = world.object_shape_pose(object);
     let options = IkOptions {
@@ -191,24 +213,19 @@ fn ik_confirms(world: &World, agent: AgentId, base: Pose, q: &[f32], object: Obj
         orientation_tolerance: 1.0,
         orientation: false,
     };
-    let mut rng = fastrand::Rng::with_seed(0x5eed);
-    ["right_arm", "left_arm"].iter().any(|name| {
-        let Ok(chain) = model.chain(name) else {
-            return false;
-        };
-        let root = model.link_pose_by_id(base, q, chain.root_link).translation;
-        let point = obj.shape.project_point(&pose, root, true).point;
-        solve_ik(
-            model,
-            &chain,
-            base,
-            q,
-            Pose::from_translation(point),
-            &options,
-            &mut rng,
-        )
-        .is_ok()
-    })
+    let root = model.link_pose_by_id(base, q, chain.root_link).translation;
+    let point = obj.shape.project_point(&pose, root, true).point;
+    solve_ik(
+        model,
+        chain,
+        base,
+        q,
+        Pose::from_translation(point),
+        &options,
+        rng,
+    )
+    .ok()
+    .map(|s| s.configuration)
 }
 
 /// Level-4 stances stand upright; reaching from them may also lean forward.

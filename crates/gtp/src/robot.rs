@@ -12,7 +12,7 @@ use geometry::collision::{
 };
 use geometry::ik::{IkOptions, solve_ik};
 use geometry::scene::{AgentId, AgentKind, ObjectId};
-use geometry::world::World;
+use geometry::world::{Attachment, World};
 use parry3d::math::{Pose, Vector};
 
 use crate::rrt::{self, JointPath, JointSpace, RrtParams};
@@ -274,19 +274,27 @@ pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
     }
 }
 
+/// What the robot holds in its grippers: each object attached to an arm's tool frame, with
+/// that arm and the attachment.
+pub fn in_grippers<'a>(
+    world: &'a World,
+    setup: &'a RobotSetup,
+) -> impl Iterator<Item = (ObjectId, &'a Arm, Attachment)> + 'a {
+    world.object_ids().filter_map(move |o| {
+        let att = world.attachment(o).filter(|a| a.agent == setup.agent)?;
+        let arm = setup.arms.iter().find(|a| a.tool_link == att.link)?;
+        Some((o, arm, att))
+    })
+}
+
 /// The object the robot carries in one of its grippers, if any, as a held object for its
 /// collision checks (the base's drives must carry it round obstacles too). With an object in
-/// each gripper, the first arm's.
+/// each gripper, the first found.
 pub fn carried(world: &World, setup: &RobotSetup) -> Result<Option<HeldObject>, String> {
-    for o in world.object_ids() {
-        let Some(att) = world.attachment(o).filter(|a| a.agent == setup.agent) else {
-            continue;
-        };
-        if let Some(arm) = setup.arms.iter().find(|a| a.tool_link == att.link) {
-            return held_object(world, setup, arm, o, att.grasp).map(Some);
-        }
-    }
-    Ok(None)
+    in_grippers(world, setup)
+        .next()
+        .map(|(o, arm, att)| held_object(world, setup, arm, o, att.grasp))
+        .transpose()
 }
 
 /// The objects the robot holds in the grippers of arms other than `arm`, as held objects for
@@ -297,19 +305,10 @@ pub fn held_elsewhere(
     setup: &RobotSetup,
     arm: &Arm,
 ) -> Result<Vec<HeldObject>, String> {
-    let mut out = Vec::new();
-    for o in world.object_ids() {
-        let Some(att) = world.attachment(o).filter(|a| a.agent == setup.agent) else {
-            continue;
-        };
-        if att.link == arm.tool_link {
-            continue;
-        }
-        if let Some(other) = setup.arms.iter().find(|a| a.tool_link == att.link) {
-            out.push(held_object(world, setup, other, o, att.grasp)?);
-        }
-    }
-    Ok(out)
+    in_grippers(world, setup)
+        .filter(|(_, other, _)| other.tool_link != arm.tool_link)
+        .map(|(o, other, att)| held_object(world, setup, other, o, att.grasp))
+        .collect()
 }
 
 /// A held object for collision checks: `object` attached to the arm's tool frame at

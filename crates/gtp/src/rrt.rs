@@ -372,20 +372,8 @@ enum Extend {
     Reached(usize),
 }
 
+/// One step of `tree` from node `near`, the tree's nearest to `target`, towards `target`.
 fn extend(
-    tree: &mut Tree,
-    space: &JointSpace,
-    target: &[f32],
-    params: &RrtParams,
-    valid: &mut impl FnMut(&[f32]) -> bool,
-    stats: &mut RrtStats,
-) -> Extend {
-    let near = tree.nearest(space, target);
-    extend_from(tree, near, space, target, params, valid, stats)
-}
-
-/// [`extend`] from node `near`, known to be the tree's nearest to `target`.
-fn extend_from(
     tree: &mut Tree,
     near: usize,
     space: &JointSpace,
@@ -434,7 +422,7 @@ fn connect(
     loop {
         // A node that advanced towards the target is the tree's nearest to it (nearer than
         // the node it grew from, the nearest before): no search needed for the next step.
-        match extend_from(tree, near, space, target, params, valid, stats) {
+        match extend(tree, near, space, target, params, valid, stats) {
             Extend::Advanced(i) => near = i,
             other => return other,
         }
@@ -543,7 +531,8 @@ fn plan_once(
             return Err((RrtError::TimeLimit(params.time_limit), stats));
         }
         space.sample(rng, &mut sample);
-        let new = match extend(&mut a, space, &sample, params, &mut valid, &mut stats) {
+        let near = a.nearest(space, &sample);
+        let new = match extend(&mut a, near, space, &sample, params, &mut valid, &mut stats) {
             Extend::Trapped => None,
             Extend::Advanced(i) | Extend::Reached(i) => Some(i),
         };

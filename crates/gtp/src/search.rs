@@ -224,11 +224,9 @@ impl Search {
                     .map_err(|e| e.to_string())?;
                 for (ai, a) in setup.arms.iter().enumerate() {
                     // A gripper already holding something cannot grasp the object.
-                    if let Some(other) = world.object_ids().find(|&id| {
-                        world
-                            .attachment(id)
-                            .is_some_and(|at| at.agent == robot && at.link == a.tool_link)
-                    }) {
+                    if let Some((other, ..)) = robot::in_grippers(&world, &setup)
+                        .find(|(_, by, _)| by.tool_link == a.tool_link)
+                    {
                         busy_arms.push(format!("{} holds `{}`", a.name, world.object(other).name));
                         continue;
                     }
@@ -2178,30 +2176,7 @@ impl Search {
             .find(|c| c.tip_link == hand)
             .filter(|_| in_hand(hand).is_empty())
             .and_then(|c| {
-                let root = hmodel.link_pose_by_id(hbase, &qh0, c.root_link).translation;
-                let point = world
-                    .object(o)
-                    .shape
-                    .project_point(&world.object_shape_pose(o), root, true)
-                    .point;
-                let opts = geometry::ik::IkOptions {
-                    attempts: 4,
-                    iterations: 80,
-                    position_tolerance: 0.01,
-                    orientation_tolerance: 1.0,
-                    orientation: false,
-                };
-                geometry::ik::solve_ik(
-                    &hmodel,
-                    &c,
-                    hbase,
-                    &qh0,
-                    Pose::from_translation(point),
-                    &opts,
-                    &mut rng,
-                )
-                .ok()
-                .map(|s| (c, s.configuration))
+                geometry::facts::arm_reach(&world, h, &c, hbase, &qh0, o, &mut rng).map(|q| (c, q))
             });
         // The object rests on the hand as the person holds it, on what the hand already
         // holds; the person's withdraw carries it there from the hand-over.

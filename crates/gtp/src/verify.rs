@@ -120,9 +120,10 @@ pub fn recheck_trajectories(
             checkers.push(c);
         }
         // What the other grippers hold stays where it is, in the arm's way.
+        let elsewhere = robot::held_elsewhere(&w, &setup, arm)?;
         for c in &mut checkers {
-            for h in robot::held_elsewhere(&w, &setup, arm)? {
-                c.add_other_held_object(h);
+            for h in &elsewhere {
+                c.add_other_held_object(h.clone());
             }
         }
         let mut q = w.agent_state(robot_id).q.clone();
