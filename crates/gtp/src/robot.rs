@@ -16,6 +16,7 @@ use geometry::world::{Attachment, World};
 use parry3d::math::{Pose, Vector};
 
 use crate::rrt::{self, JointPath, JointSpace, RrtParams};
+use crate::solution::HeldRecord;
 
 /// One arm of the robot.
 #[derive(Clone, Debug)]
@@ -287,14 +288,33 @@ pub fn in_grippers<'a>(
     })
 }
 
-/// The object the robot carries in one of its grippers, if any, as a held object for its
-/// collision checks (the base's drives must carry it round obstacles too). With an object in
-/// each gripper, the first found.
-pub fn carried(world: &World, setup: &RobotSetup) -> Result<Option<HeldObject>, String> {
+/// Makes `checker` carry everything the robot holds in its grippers (the base's drives must
+/// carry each held object round obstacles, and no held object may pass through the robot).
+pub fn carry_all(
+    checker: &mut CollisionChecker,
+    world: &World,
+    setup: &RobotSetup,
+) -> Result<(), String> {
+    let mut held = in_grippers(world, setup)
+        .map(|(o, arm, att)| held_object(world, setup, arm, o, att.grasp))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter();
+    checker.set_held_object(held.next());
+    for h in held {
+        checker.add_other_held_object(h);
+    }
+    Ok(())
+}
+
+/// The record of what the robot carries while its base drives (the object in the first
+/// gripper that holds one, with its pose in that gripper's tool frame), for the trajectory.
+pub fn carried_record(world: &World, setup: &RobotSetup) -> Option<HeldRecord> {
     in_grippers(world, setup)
         .next()
-        .map(|(o, arm, att)| held_object(world, setup, arm, o, att.grasp))
-        .transpose()
+        .map(|(o, _, att)| HeldRecord {
+            object: world.object(o).name.clone(),
+            object_in_tool: att.grasp.into(),
+        })
 }
 
 /// The objects the robot holds in the grippers of arms other than `arm`, as held objects for

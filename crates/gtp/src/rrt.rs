@@ -212,6 +212,25 @@ impl JointPath {
             .sum()
     }
 
+    /// The same path with each continuous joint's values unwrapped (consecutive waypoints differ
+    /// by at most half a turn), so that plain linear interpolation between waypoints, as an
+    /// exporter or a controller does it, follows the short way the planner checked.
+    pub fn unwrapped(&self, space: &JointSpace) -> JointPath {
+        let mut waypoints: Vec<Vec<f32>> = Vec::with_capacity(self.waypoints.len());
+        for w in &self.waypoints {
+            let mut q = w.clone();
+            if let Some(prev) = waypoints.last() {
+                for i in 0..q.len().min(space.dim()) {
+                    if space.continuous[i] {
+                        q[i] = prev[i] + wrap(w[i] - prev[i]);
+                    }
+                }
+            }
+            waypoints.push(q);
+        }
+        JointPath { waypoints }
+    }
+
     /// The path's configurations with at most `resolution` per joint between consecutive ones.
     pub fn densify(&self, space: &JointSpace, resolution: f32) -> Vec<Vec<f32>> {
         let mut out = Vec::new();
@@ -826,5 +845,39 @@ mod tests {
         };
         let e = plan(&space, &[0.1, 0.1], &[0.9, 0.1], closed, &p, &mut rng).unwrap_err();
         assert_eq!(e.0, RrtError::NodeLimit(300));
+    }
+
+    /// A continuous joint crossing +-pi: the planner goes the short way (0.2 rad); the recorded
+    /// waypoints must say so to anyone interpolating them linearly, not swing 6.08 rad back.
+    #[test]
+    fn unwrapped_waypoints_interpolate_linearly_the_short_way() {
+        let space = JointSpace::new(&[(-1.0, 1.0, false), (0.0, 0.0, true)]);
+        let path = JointPath {
+            waypoints: vec![vec![0.0, 3.04], vec![0.5, -3.04], vec![0.6, -2.9]],
+        };
+        let u = path.unwrapped(&space);
+        assert_eq!(u.waypoints[0], vec![0.0, 3.04]);
+        for w in u.waypoints.windows(2) {
+            assert!((w[1][1] - w[0][1]).abs() < 0.25, "{:?}", u.waypoints);
+        }
+        // Same configurations as the planner's, modulo whole turns, and the same densified path.
+        let (a, b) = (path.densify(&space, 0.01), u.densify(&space, 0.01));
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x[0] - y[0]).abs() < 1e-6);
+            assert!(wrap(x[1] - y[1]).abs() < 1e-5);
+        }
+        let mid = |p: &JointPath| {
+            let (x, y) = (&p.waypoints[0][1], &p.waypoints[1][1]);
+            (x + y) / 2.0
+        };
+        assert!(
+            wrap(mid(&u) - PI).abs() < 1e-5,
+            "the linear midpoint is at pi"
+        );
+        assert!(
+            mid(&path).abs() < 1e-5,
+            "the raw midpoint was at 0, the long way"
+        );
     }
 }

@@ -1856,7 +1856,7 @@ impl Search {
             arm: arm.name.clone(),
             joints: arm.joint_names.clone(),
             length: path.length(&arm.space),
-            waypoints: path.waypoints,
+            waypoints: path.unwrapped(&arm.space).waypoints,
             held,
             gripper_opening: opening,
             ignored,
@@ -2303,8 +2303,8 @@ impl Search {
             obstacles,
             self.world.agent_state(robot).base,
         );
-        match robot::carried(&self.world, &self.setup) {
-            Ok(held) => checker.set_held_object(held),
+        match robot::carry_all(&mut checker, &self.world, &self.setup) {
+            Ok(()) => {}
             Err(e) => {
                 self.failure = Some(Failure {
                     constraint: "object-collision".into(),
@@ -2441,8 +2441,8 @@ impl Search {
                         arm: "base".into(),
                         joints: vec!["base_x".into(), "base_y".into(), "base_yaw".into()],
                         length: path.length(&space),
-                        waypoints: path.waypoints,
-                        held: None,
+                        waypoints: path.unwrapped(&space).waypoints,
+                        held: robot::carried_record(&self.world, &self.setup),
                         gripper_opening: 0.0,
                         ignored: vec![],
                         straddles: None,

@@ -47,7 +47,7 @@ pub fn recheck_trajectories(
                 obstacles,
                 w.agent_state(robot_id).base,
             );
-            checker.set_held_object(robot::carried(&w, &setup)?);
+            robot::carry_all(&mut checker, &w, &setup)?;
             let space =
                 JointSpace::new(&[(-1e3, 1e3, false), (-1e3, 1e3, false), (0.0, 0.0, true)]);
             let path = JointPath {

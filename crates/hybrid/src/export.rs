@@ -154,6 +154,7 @@ fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>)
     // of that name (a person's hand).
     let tool_link = arm
         .map(|a| a.tool_link)
+        .or_else(|| attached_link(&world, agent, t))
         .or_else(|| model.chain(&t.arm).ok().map(|c| c.tip_link));
     let dof: Vec<Option<usize>> = t
         .joints
@@ -231,6 +232,16 @@ fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>)
         "frames": frames,
     });
     (value, world)
+}
+
+/// The link of `agent` that the object `t` carries is attached to in `world` (a drive carries
+/// what the grippers hold).
+fn attached_link(world: &World, agent: geometry::scene::AgentId, t: &Trajectory) -> Option<usize> {
+    let o = world.object_id(&t.held.as_ref()?.object)?;
+    world
+        .attachment(o)
+        .filter(|a| a.agent == agent)
+        .map(|a| a.link)
 }
 
 /// The plan JSON of a finished run (see `docs/plan-json.md`).
