@@ -40,6 +40,7 @@ pub mod rrt;
 pub mod search;
 pub mod solution;
 pub mod stats;
+pub mod take;
 pub mod target;
 pub mod task;
 pub mod verify;

@@ -305,7 +305,7 @@ impl Default for PlannerConfig {
 #[derive(Debug, Default)]
 pub struct Planner {
     config: PlannerConfig,
-    setups: Mutex<Vec<(Weak<WorldModel>, Arc<RobotSetup>)>>,
+    setups: Mutex<Vec<(Weak<WorldModel>, AgentId, Arc<RobotSetup>)>>,
 }
 
 impl Planner {
@@ -329,16 +329,26 @@ impl Planner {
 
     /// The robot of the world's scene (built on first use per scene, then shared).
     pub fn robot(&self, world: &World) -> Result<Arc<RobotSetup>, GtpError> {
+        let agent = world
+            .agent_ids()
+            .find(|&a| world.agent(a).kind() == AgentKind::Robot)
+            .ok_or_else(|| GtpError::Setup("the scene has no robot agent".into()))?;
+        self.agent_setup(world, agent)
+    }
+
+    /// The arms of any agent of the world's scene, for motion planning (a person's in a
+    /// hand-over); built on first use per scene and agent, then shared.
+    pub fn agent_setup(&self, world: &World, agent: AgentId) -> Result<Arc<RobotSetup>, GtpError> {
         let mut setups = self.setups.lock().unwrap_or_else(|e| e.into_inner());
-        setups.retain(|(w, _)| w.strong_count() > 0);
-        if let Some((_, s)) = setups
+        setups.retain(|(w, _, _)| w.strong_count() > 0);
+        if let Some((_, _, s)) = setups
             .iter()
-            .find(|(w, _)| std::ptr::eq(w.as_ptr(), Arc::as_ptr(world.model())))
+            .find(|(w, a, _)| *a == agent && std::ptr::eq(w.as_ptr(), Arc::as_ptr(world.model())))
         {
             return Ok(s.clone());
         }
-        let setup = Arc::new(RobotSetup::new(world).map_err(GtpError::Setup)?);
-        setups.push((Arc::downgrade(world.model()), setup.clone()));
+        let setup = Arc::new(RobotSetup::for_agent(world, agent).map_err(GtpError::Setup)?);
+        setups.push((Arc::downgrade(world.model()), agent, setup.clone()));
         Ok(setup)
     }
 
@@ -367,7 +377,11 @@ impl Planner {
             constraints.set(k, v).map_err(GtpError::Constraint)?;
         }
         let setup = self.robot(world)?;
-        let search = Search::new(
+        let person = match (task.kind, task.human) {
+            (TaskKind::Take, Some(h)) => Some(self.agent_setup(world, h)?),
+            _ => None,
+        };
+        let mut search = Search::new(
             self.config.clone(),
             setup,
             world.clone(),
@@ -376,6 +390,7 @@ impl Planner {
             options.seed,
         )
         .map_err(GtpError::Setup)?;
+        search.person = person;
         Ok(SolutionStream {
             task,
             constraints,

@@ -107,6 +107,12 @@ impl RobotSetup {
             .agent_ids()
             .find(|&a| world.agent(a).kind() == AgentKind::Robot)
             .ok_or("the scene has no robot agent")?;
+        RobotSetup::for_agent(world, agent)
+    }
+
+    /// Any agent's arms (`right_arm`, `left_arm`), for motion planning: the robot's, or a
+    /// person's in a hand-over (their hand frame is the tool frame; no gripper joint).
+    pub fn for_agent(world: &World, agent: AgentId) -> Result<RobotSetup, String> {
         let model = world.agent(agent).model.clone();
         let self_model = Arc::new(SelfCollisionModel::new(
             model.clone(),
@@ -183,7 +189,7 @@ impl RobotSetup {
         }
         if arms.is_empty() {
             return Err(format!(
-                "robot `{}` has no arm chain (right_arm or left_arm)",
+                "agent `{}` has no arm chain (right_arm or left_arm)",
                 world.agent(agent).name()
             ));
         }

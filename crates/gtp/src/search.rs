@@ -132,6 +132,8 @@ pub(crate) struct Search {
     pick_reason: String,
     pub(crate) failure: Option<Failure>,
     done: bool,
+    /// The person's arms, for a take's reach and withdraw.
+    pub(crate) person: Option<Arc<RobotSetup>>,
 }
 
 const STRAIGHT_STEPS: usize = 3;
@@ -309,6 +311,7 @@ impl Search {
             pick_reason: String::new(),
             failure: None,
             done: false,
+            person: None,
         })
     }
 
@@ -2138,66 +2141,6 @@ impl Search {
         robot::set_opening(&setup.model, arm, &mut q, ch.grasp.opening);
         let base = after.agent_state(robot_id).base;
         after.set_agent_config(robot_id, base, &q);
-        // The nearest free hand; with both full, the nearest, the object on what it holds.
-        let at = world.object_pose(o).translation;
-        let hands = &world.agent(h).hand_links;
-        let poses = world.agent_state(h).link_poses();
-        let in_hand = |l: usize| {
-            world
-                .object_ids()
-                .filter(|&x| {
-                    world
-                        .attachment(x)
-                        .is_some_and(|a| a.agent == h && a.link == l)
-                })
-                .collect::<Vec<_>>()
-        };
-        let Some(&hand) = hands.iter().min_by(|&&a, &&b| {
-            let key = |l: usize| (!in_hand(l).is_empty(), (poses[l].translation - at).length());
-            let (ka, kb) = (key(a), key(b));
-            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-        }) else {
-            self.failure = Some(Failure {
-                constraint: "held".into(),
-                message: format!("{hname} has no hand to take `{oname}` with"),
-                limit: false,
-            });
-            return None;
-        };
-        // The person's arm out to the object and back with it, when the hand is free and its
-        // inverse kinematics reaches the object from the person's posture now (the reach test
-        // above may have counted a lean or a step): shown, not planned (people are not steered).
-        let hmodel = world.agent(h).model.clone();
-        let hbase = world.agent_state(h).base;
-        let qh0 = world.agent_state(h).q.clone();
-        let reach = ["right_arm", "left_arm"]
-            .iter()
-            .filter_map(|n| hmodel.chain(n).ok())
-            .find(|c| c.tip_link == hand)
-            .filter(|_| in_hand(hand).is_empty())
-            .and_then(|c| {
-                geometry::facts::arm_reach(&world, h, &c, hbase, &qh0, o, &mut rng).map(|q| (c, q))
-            });
-        // The object rests on the hand as the person holds it, on what the hand already
-        // holds; the person's withdraw carries it there from the hand-over.
-        let hand_pose = poses[hand];
-        let below: f32 = in_hand(hand)
-            .iter()
-            .map(|&x| {
-                let b = world.object_aabb(x);
-                b.maxs.z - b.mins.z
-            })
-            .sum();
-        let half = {
-            let b = world.object_aabb(o);
-            (b.maxs.z - b.mins.z) / 2.0
-        };
-        let held_at = Pose::from_parts(
-            hand_pose.translation + Vector::Z * (below + half),
-            world.object_pose(o).rotation,
-        );
-        let grasp = hand_pose.inverse() * held_at;
-        after.attach_with_grasp(o, h, hand, grasp);
         let retreat = self.trajectory(
             Phase::Retreat,
             arm,
@@ -2207,46 +2150,87 @@ impl Search {
             vec![oname.clone()],
             clear.then(|| (oname.clone(), world.object_pose(o))),
         );
-        let Some((chain, qr)) = reach else {
-            return Some(self.take_solution(after, level, vec![retreat]));
-        };
-        let values = |q: &[f32]| chain.dofs.iter().map(|&k| q[k]).collect::<Vec<f32>>();
-        let (a, b) = (values(&qh0), values(&qr));
-        let length = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| (x - y).powi(2))
-            .sum::<f32>()
-            .sqrt();
-        let human_motion = |phase, waypoints, held| Trajectory {
+        let (motion, person) = self.person_takes(&world, &after, o)?;
+        let hand = &person.arms[motion.arm];
+        after.set_agent_config(h, world.agent_state(h).base, &motion.q_end);
+        after.attach_with_grasp(o, h, hand.tool_link, motion.grasp);
+        let human_motion = |phase, path: JointPath, held| Trajectory {
             phase,
             agent: hname.clone(),
-            arm: chain.name.clone(),
-            joints: chain
-                .dofs
-                .iter()
-                .map(|&k| hmodel.dof_names()[k].clone())
-                .collect(),
-            length,
-            waypoints,
+            arm: hand.name.clone(),
+            joints: hand.joint_names.clone(),
+            length: path.length(&hand.space),
+            waypoints: path.unwrapped(&hand.space).waypoints,
             held,
             gripper_opening: 0.0,
             ignored: vec![],
             straddles: None,
         };
+        let held = HeldRecord {
+            object: oname.clone(),
+            object_in_tool: motion.grasp.into(),
+        };
         let trajectories = vec![
-            human_motion(Phase::Reach, vec![a.clone(), b.clone()], None),
+            human_motion(Phase::Reach, motion.reach.clone(), None),
             retreat,
-            human_motion(
-                Phase::Withdraw,
-                vec![b, a],
-                Some(HeldRecord {
-                    object: oname.clone(),
-                    object_in_tool: grasp.into(),
-                }),
-            ),
+            human_motion(Phase::Withdraw, motion.withdraw.clone(), Some(held)),
         ];
         Some(self.take_solution(after, level, trajectories))
+    }
+
+    /// The person's reach and withdraw of a take, with the free hand nearest the object
+    /// (`before`: the robot holds it out; `after`: the robot drawn back). `None`, with the
+    /// reason recorded, when both hands are full or no collision-free motion exists.
+    fn person_takes(
+        &mut self,
+        before: &World,
+        after: &World,
+        o: ObjectId,
+    ) -> Option<(crate::take::TakeMotion, Arc<RobotSetup>)> {
+        let oname = self.object_name();
+        let hname = self.human_name();
+        let Some(person) = self.person.clone() else {
+            self.failure = Some(Failure {
+                constraint: "held".into(),
+                message: format!("{hname} has no arms to take `{oname}` with"),
+                limit: false,
+            });
+            return None;
+        };
+        let at = before.object_pose(o).translation;
+        let free_arm = (0..person.arms.len())
+            .filter(|&i| {
+                robot::in_grippers(before, &person)
+                    .all(|(_, a, _)| a.tool_link != person.arms[i].tool_link)
+            })
+            .min_by(|&i, &j| {
+                let d = |k: usize| {
+                    let p = before.agent_state(person.agent).link_poses()[person.arms[k].tool_link];
+                    (p.translation - at).length()
+                };
+                d(i).total_cmp(&d(j))
+            });
+        let Some(arm) = free_arm else {
+            self.failure = Some(Failure {
+                constraint: "held".into(),
+                message: format!(
+                    "both of {hname}'s hands hold something: no hand to take `{oname}` with"
+                ),
+                limit: false,
+            });
+            return None;
+        };
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        self.stats.planner_calls += 2;
+        match crate::take::plan_take(&person, arm, before, after, o, &self.cfg.rrt, &mut rng) {
+            Ok(m) => Some((m, person)),
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("{hname} cannot take `{oname}`: {e}")
+                });
+                None
+            }
+        }
     }
 
     /// A take's solution: the world after it, the effort at which the human reached the
