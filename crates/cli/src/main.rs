@@ -13,7 +13,8 @@ pub mod exit {
     pub const OK: u8 = 0;
     /// The problem is proven unsolvable (or a checked plan is invalid).
     pub const UNSOLVABLE: u8 = 1;
-    /// A time, node or memory limit stopped the search.
+    /// A time, node or memory limit stopped the search, or the strategy's cap on geometric
+    /// alternatives (symbolic, geometric-first) left it incomplete.
     pub const LIMIT: u8 = 2;
     /// Bad input: unreadable or malformed files, unknown names, bad arguments.
     pub const BAD_INPUT: u8 = 3;
@@ -24,8 +25,9 @@ pub mod exit {
     name = "htngtp",
     version,
     about = "A combined HTN and geometric task planner for robots that work among people",
-    after_help = "Exit codes: 0 plan found / success, 1 proven unsolvable (or plan invalid), \
-                  2 limit reached, 3 bad input."
+    after_help = "Exit codes: 0 plan found / success; 1 proven unsolvable (a complete search, \
+                  no cap) or plan invalid; 2 stopped incomplete: a time, node or memory limit, \
+                  or the strategy's cap on geometric alternatives; 3 bad input."
 )]
 struct Cli {
     #[command(subcommand)]

@@ -587,6 +587,13 @@ pub enum Contact {
         /// The agent's link.
         link: String,
     },
+    /// Two objects the agent holds (one in each hand).
+    HeldObjects {
+        /// One held object's name.
+        object_a: String,
+        /// The other's.
+        object_b: String,
+    },
 }
 
 impl fmt::Display for Contact {
@@ -600,6 +607,9 @@ impl fmt::Display for Contact {
                 write!(f, "held {object} hits {obstacle}")
             }
             Contact::HeldLink { object, link } => write!(f, "held {object} hits link {link}"),
+            Contact::HeldObjects { object_a, object_b } => {
+                write!(f, "held {object_a} hits held {object_b}")
+            }
         }
     }
 }
@@ -614,6 +624,8 @@ enum Hit {
     HeldObstacle(usize, usize),
     /// Held object `k` against shape `i` of the agent.
     HeldShape(usize, usize),
+    /// Held objects `k` and `l` (`k < l`) against each other.
+    HeldPair(usize, usize),
 }
 
 /// Per-thread buffers so that checks do not allocate.
@@ -741,7 +753,7 @@ impl CollisionChecker {
             let unmoving = match h {
                 Hit::SelfPair(a, b) => !moving(a as u16) && !moving(b as u16),
                 Hit::Obstacle(s, _) => !moving(s as u16),
-                Hit::HeldObstacle(..) | Hit::HeldShape(..) => false,
+                Hit::HeldObstacle(..) | Hit::HeldShape(..) | Hit::HeldPair(..) => false,
             };
             if unmoving {
                 static_hits.push(h);
@@ -913,6 +925,10 @@ impl CollisionChecker {
                 object: held(k),
                 link: shape_link(s),
             },
+            Hit::HeldPair(k, l) => Contact::HeldObjects {
+                object_a: held(k),
+                object_b: held(l),
+            },
         }
     }
 
@@ -1040,6 +1056,18 @@ impl CollisionChecker {
                     }
                     if intersects(&poses[i], &*s.shape.0, &p, &*held.shape.0)
                         && report(Hit::HeldShape(k, i))
+                    {
+                        return;
+                    }
+                }
+            }
+            // The held objects against each other (what one hand carries past the other's).
+            let all = || self.held.iter().chain(&self.other_held);
+            for (k, a) in all().enumerate() {
+                let pa = links[a.link] * a.grasp;
+                for (l, b) in all().enumerate().skip(k + 1) {
+                    let pb = links[b.link] * b.grasp;
+                    if intersects(&pa, &*a.shape.0, &pb, &*b.shape.0) && report(Hit::HeldPair(k, l))
                     {
                         return;
                     }

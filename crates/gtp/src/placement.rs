@@ -22,7 +22,8 @@ pub struct PlacementParams {
     pub max_faces: usize,
     /// Yaw angles per face, evenly spaced over a full turn.
     pub yaws: usize,
-    /// Height above the support surface at which the object is set down (metres).
+    /// Height above the support surface at which the gripper releases the object (metres); it
+    /// then settles onto the surface (the planner's world and the plan hold it there).
     pub clearance: f32,
     /// Faces whose stability margin is below this (metres) are not resting faces.
     pub min_margin: f32,
@@ -33,7 +34,7 @@ impl Default for PlacementParams {
         PlacementParams {
             max_faces: 11,
             yaws: 10,
-            clearance: 0.01,
+            clearance: 0.002,
             min_margin: 0.003,
         }
     }

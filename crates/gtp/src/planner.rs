@@ -300,12 +300,15 @@ impl Default for PlannerConfig {
     }
 }
 
+/// A cached agent setup: the scene it belongs to (while alive), the agent, the setup.
+type SetupEntry = (Weak<WorldModel>, AgentId, Arc<RobotSetup>);
+
 /// The geometric task planner. Keeps what depends only on the scene (grasp sets, the robot's
 /// self-collision model) between calls; `Send + Sync`, cheap to share behind an `Arc`.
 #[derive(Debug, Default)]
 pub struct Planner {
     config: PlannerConfig,
-    setups: Mutex<Vec<(Weak<WorldModel>, AgentId, Arc<RobotSetup>)>>,
+    setups: Mutex<Vec<SetupEntry>>,
 }
 
 impl Planner {

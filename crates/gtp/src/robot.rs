@@ -457,11 +457,13 @@ impl<'a> ArmMotion<'a> {
         attempts: usize,
         rng: &mut fastrand::Rng,
     ) -> Option<Vec<f32>> {
+        // Tight: a grasp's held object is posed by the tool frame the solution reaches, so
+        // the tolerance is how far the object seems to jump when grasped or released.
         let opts = IkOptions {
             attempts,
             iterations: 60,
-            position_tolerance: 1e-3,
-            orientation_tolerance: 1e-2,
+            position_tolerance: 2e-4,
+            orientation_tolerance: 2e-3,
             orientation: true,
         };
         let q = self.full(seed);

@@ -140,6 +140,9 @@ const STRAIGHT_STEPS: usize = 3;
 /// Candidate points of a hiding task: distance bins (metres) within which the best hidden
 /// come first.
 const BIN: f32 = 0.5;
+/// Gap left under a placed object once it has settled on its surface (metres): contact, with
+/// a margin for rounding.
+const SETTLED_GAP: f32 = 0.0002;
 /// Lift height during which the object may still touch what it rested on.
 const UNSTICK: f32 = 0.02;
 
@@ -1676,14 +1679,22 @@ impl Search {
         ))
     }
 
-    /// The world after a placement: object `o` at `pose`, the robot in its starting posture.
+    /// The world after a placement: object `o` settled from its release `pose` onto the
+    /// surface, the robot in its starting posture.
     fn placed_world(&self, o: ObjectId, pose: Pose) -> World {
         let mut after = self.world.clone();
         let robot = self.setup.agent;
         let base = after.agent_state(robot).base;
         after.set_agent_config(robot, base, &self.q0_full);
-        after.set_object_pose(o, pose);
+        after.set_object_pose(o, self.settled(pose));
         after
+    }
+
+    /// Where an object released at `pose` (the placement's clearance above its surface) comes
+    /// to rest: [`SETTLED_GAP`] above the surface, straight below.
+    fn settled(&self, pose: Pose) -> Pose {
+        let drop = (self.cfg.placement.clearance - SETTLED_GAP).max(0.0);
+        Pose::from_parts(pose.translation - Vector::Z * drop, pose.rotation)
     }
 
     /// For placing tasks: whether some orientation at the current point meets the human-related
@@ -1964,7 +1975,7 @@ impl Search {
             geometry::facts::reachable_effort(&after, h, o, &params)
         });
         let placement = placed.map(|(p, orient, support)| PlacementRecord {
-            pose: orient.pose.into(),
+            pose: self.settled(orient.pose).into(),
             support,
             point: [p.x, p.y, p.z],
             orientation: orient.face,

@@ -134,7 +134,7 @@ fn reach_goal(
             };
             q = s;
             let depth = hand_depth(m, &q, world, object);
-            if depth <= PALM_CLEARANCE {
+            if depth == 0.0 {
                 match m.collision(&q) {
                     None => return Ok(q),
                     Some(c) => last = c,

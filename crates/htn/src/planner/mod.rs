@@ -81,6 +81,9 @@ pub enum Limit {
     Time,
     Nodes,
     Memory,
+    /// The strategy's cap on geometric solutions per task (symbolic: one; geometric-first:
+    /// k per repair): every choice within the cap failed, which proves nothing.
+    GeometricAlternatives,
 }
 
 impl std::fmt::Display for Limit {
@@ -89,6 +92,10 @@ impl std::fmt::Display for Limit {
             Limit::Time => "time limit",
             Limit::Nodes => "node limit",
             Limit::Memory => "memory limit",
+            Limit::GeometricAlternatives => {
+                "strategy's cap on geometric alternatives (not a proof that no plan exists: \
+                 --strategy chronological tries every geometric solution)"
+            }
         })
     }
 }
@@ -137,8 +144,9 @@ impl Default for PlannerOptions {
 pub enum Outcome {
     /// A plan.
     Found { plan: Plan },
-    /// The whole search space was explored: no plan exists (with [`Strategy::Symbolic`] or
-    /// [`Strategy::GeometricFirst`], within the geometric solutions that strategy tries).
+    /// The whole search space was explored: no plan exists. Never with [`Strategy::Symbolic`]
+    /// or [`Strategy::GeometricFirst`] once a geometric task was asked: their cap on geometric
+    /// solutions makes the search incomplete ([`Limit::GeometricAlternatives`]).
     Unsolvable,
     /// A limit stopped the search.
     LimitReached { limit: Limit },

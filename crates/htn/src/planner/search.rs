@@ -224,6 +224,8 @@ pub(crate) struct Search<'a, 'o> {
     visited: HashSet<u128, BuildHasherDefault<FxHasher>>,
     bound: usize,
     cutoff: bool,
+    /// Whether a geometric task was asked under a strategy that caps its solutions.
+    geo_capped: bool,
     /// Whether the left-recursion check is on (off in the complete fallback search).
     loop_check: bool,
     stats: SearchStats,
@@ -345,6 +347,7 @@ impl<'a, 'o> Search<'a, 'o> {
             visited: HashSet::default(),
             bound: opts.initial_depth_bound.max(1),
             cutoff: false,
+            geo_capped: false,
             loop_check: opts.loop_check,
             stats: SearchStats::default(),
             start: Instant::now(),
@@ -394,7 +397,13 @@ impl<'a, 'o> Search<'a, 'o> {
                         continue;
                     }
                     if !self.cutoff {
-                        break Outcome::Unsolvable;
+                        break if self.geo_capped {
+                            Outcome::LimitReached {
+                                limit: Limit::GeometricAlternatives,
+                            }
+                        } else {
+                            Outcome::Unsolvable
+                        };
                     }
                     self.reset();
                     self.bound = self.bound.saturating_mul(2);
@@ -1198,6 +1207,7 @@ impl<'a, 'o> Search<'a, 'o> {
             .as_deref_mut()
             .expect("GS actions need an oracle");
         let stream = oracle.open(&c.geo_tasks[*g as usize], &names)?;
+        self.geo_capped |= self.opts.strategy != Strategy::Chronological;
         let marks = self.marks();
         self.frames.push(Frame {
             marks,
