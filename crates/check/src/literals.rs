@@ -43,7 +43,7 @@ pub fn check_literals(plan: &Plan, world: &World, step: &Step, faults: &mut Vec<
         };
         let verdict = match pred.as_str() {
             "visible" => visible(plan, world, o, a, claimed),
-            "reachable" => Some(reachable(plan, world, o, a, claimed)),
+            "reachable" => reachable(plan, world, o, a, claimed),
             _ => continue,
         };
         let Some((stale, detail)) = verdict else {
@@ -101,7 +101,14 @@ fn visible(
     Some((stale, detail))
 }
 
-fn reachable(plan: &Plan, world: &World, o: usize, a: usize, claimed: bool) -> (bool, String) {
+/// (stale, what was measured); `None` when the agent has no link named `*shoulder*`.
+fn reachable(
+    plan: &Plan,
+    world: &World,
+    o: usize,
+    a: usize,
+    claimed: bool,
+) -> Option<(bool, String)> {
     let agent = &plan.agents[a];
     let poses = &world.agents[a];
     let object = &plan.objects[o];
@@ -121,6 +128,9 @@ fn reachable(plan: &Plan, world: &World, o: usize, a: usize, claimed: bool) -> (
         .filter(|&l| agent.links[l].name.contains("shoulder"))
         .map(|l| dist(poses[l].translation))
         .fold(f32::INFINITY, f32::min);
+    if !shoulder.is_finite() {
+        return None;
+    }
     let reach = match agent.kind {
         AgentKind::Robot => ROBOT_REACH,
         AgentKind::Human => HUMAN_REACH,
@@ -135,7 +145,7 @@ fn reachable(plan: &Plan, world: &World, o: usize, a: usize, claimed: bool) -> (
     } else {
         touching || shoulder < reach - REACH_UNDER
     };
-    (stale, detail)
+    Some((stale, detail))
 }
 
 /// A pinhole camera: origin and orthonormal forward, left, up.

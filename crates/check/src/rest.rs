@@ -39,10 +39,12 @@ pub fn check_rest(
             .iter()
             .filter(|p| p.owner != Owner::Object(o))
             .collect();
-        for (key, depth_mm, detail) in penetrations(plan, world, o, &mine, &others, opts)
-            .into_iter()
-            .chain(support(plan, world, o, &mine, &others, opts))
-        {
+        let mut found = penetrations(plan, world, o, &mine, &others, opts);
+        // An object in something rests on nothing: the penetration is the fault to report.
+        if found.is_empty() {
+            found.extend(support(plan, world, o, &mine, &others, opts));
+        }
+        for (key, depth_mm, detail) in found {
             if !before.contains(&key) {
                 report
                     .faults
