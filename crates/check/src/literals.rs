@@ -89,7 +89,10 @@ fn visible(
     };
     let scene = Scene::new(plan, world, o, a, eye.translation);
     let now = scene.fraction(&Camera::of(&eye), Some(fov));
-    let aimed = scene.fraction(&Camera::aimed(eye.translation, scene.centre()), None);
+    let pivot = (0..agent.links.len())
+        .find(|&l| agent.links[l].name.contains("head_pan"))
+        .map(|l| world.agents[a][l].translation);
+    let aimed = scene.fraction(&Camera::aimed(&eye, pivot, scene.centre()), None);
     let detail = format!(
         "visible fraction {now:.2} with the head as it is, {aimed:.2} with it turned (threshold {VISIBLE})"
     );
@@ -167,8 +170,26 @@ impl Camera {
         }
     }
 
-    /// An eye at `origin` turned to look at `target`, upright.
-    fn aimed(origin: Vector, target: Vector) -> Self {
+    /// The eye turned (pan about z, then tilt) to look at `target`, upright. With a `pivot`
+    /// (the head pan link's origin) the eye swings about it as a head does; the eye's offset from
+    /// the pivot is kept in the eye's frame. Without one it turns on the spot.
+    fn aimed(eye: &Pose, pivot: Option<Vector>, target: Vector) -> Self {
+        let offset = pivot.map(|p| eye.rotation.inverse() * (eye.translation - p));
+        let mut cam = Camera::looking(eye.translation, target);
+        for _ in 0..3 {
+            let (Some(p), Some(off)) = (pivot, offset) else {
+                break;
+            };
+            let turn = parry3d::math::Rotation::from_mat3(&parry3d::math::Mat3::from_cols(
+                cam.fwd, cam.left, cam.up,
+            ));
+            cam = Camera::looking(p + turn * off, target);
+        }
+        cam
+    }
+
+    /// A camera at `origin` looking at `target`, upright.
+    fn looking(origin: Vector, target: Vector) -> Self {
         let fwd = (target - origin).normalize_or(Vector::X);
         let left = Vector::Z.cross(fwd).normalize_or(Vector::Y);
         Camera {
@@ -187,8 +208,12 @@ impl Camera {
     }
 }
 
+/// How near the eye a viewer's own shape is part of its head, which turns with the eye and does
+/// not hide anything from it (m).
+pub const HEAD: f32 = 0.10;
+
 /// The target's shapes and the shapes that may hide it (everything else, less the viewer's
-/// shapes that contain the eye: its head).
+/// head: its shapes within [`HEAD`] of the eye).
 struct Scene {
     target: Vec<Placed>,
     others: Vec<Placed>,
@@ -206,7 +231,7 @@ impl Scene {
             .into_iter()
             .filter(|p: &Placed| {
                 let own = matches!(p.owner, Owner::Link(a, _) if a == viewer);
-                !(own && p.shape.contains_point(&p.pose, eye))
+                !(own && p.shape.distance_to_point(&p.pose, eye, true) <= HEAD)
             })
             .collect();
         Scene { target, others }

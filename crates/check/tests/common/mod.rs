@@ -23,8 +23,11 @@ fn capsule(b: [f32; 3], r: f32) -> Value {
     json!({ "capsule": { "a": [0.0, 0.0, 0.0], "b": b, "radius": r } })
 }
 
+/// A link of a test agent: name, shape (if any), initial position.
+pub type LinkSpec = (&'static str, Option<fn() -> Value>, [f32; 3]);
+
 /// The robot's links in order, with their shapes and initial positions.
-pub const BOT: &[(&str, Option<fn() -> Value>, [f32; 3])] = &[
+pub const BOT: &[LinkSpec] = &[
     ("base_link", Some(|| cuboid(0.3, 0.3, 0.2)), [0.0, 0.0, 0.2]),
     ("r_shoulder_pan_link", None, [0.1, -0.2, 1.0]),
     (
@@ -56,7 +59,7 @@ pub const BOT: &[(&str, Option<fn() -> Value>, [f32; 3])] = &[
 ];
 
 /// The member's links in order.
-pub const MEMBER: &[(&str, Option<fn() -> Value>, [f32; 3])] = &[
+pub const MEMBER: &[LinkSpec] = &[
     (
         "torso_link",
         Some(|| capsule([0.0, 0.0, 0.6], 0.15)),
@@ -72,10 +75,7 @@ pub const MEMBER: &[(&str, Option<fn() -> Value>, [f32; 3])] = &[
 ];
 
 /// Link poses of an agent: the initial positions with some links moved to `moved`.
-pub fn posture(
-    links: &[(&str, Option<fn() -> Value>, [f32; 3])],
-    moved: &[(&str, [f32; 3])],
-) -> Value {
+pub fn posture(links: &[LinkSpec], moved: &[(&str, [f32; 3])]) -> Value {
     let mut m = serde_json::Map::new();
     for (name, _, p) in links {
         let p = moved
@@ -91,12 +91,7 @@ pub fn posture(
     Value::Object(m)
 }
 
-fn agent(
-    name: &str,
-    kind: &str,
-    eye: &str,
-    links: &[(&str, Option<fn() -> Value>, [f32; 3])],
-) -> Value {
+fn agent(name: &str, kind: &str, eye: &str, links: &[LinkSpec]) -> Value {
     let ls: Vec<Value> = links
         .iter()
         .map(|(n, s, _)| {
