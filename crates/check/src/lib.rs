@@ -32,6 +32,9 @@ pub struct Options {
     pub depth: f32,
     /// Largest allowed gap between a resting object's bottom and its support (m).
     pub gap: f32,
+    /// Deepest a hand may sink into what it grasps (m): fingers squeeze, a hand does not pass
+    /// through a book.
+    pub grasp_depth: f32,
 }
 
 impl Default for Options {
@@ -40,6 +43,7 @@ impl Default for Options {
             sub: 4,
             depth: 0.001,
             gap: 0.002,
+            grasp_depth: 0.01,
         }
     }
 }

@@ -59,7 +59,7 @@ pub fn check_rest(
 type Found = (RestKey, f32, String);
 
 /// Bodies that object `o` penetrates by more than the depth tolerance (each pair once; the
-/// hand that holds `o` may).
+/// hand that holds `o` up to the grasp tolerance).
 fn penetrations(
     plan: &Plan,
     world: &World,
@@ -69,27 +69,37 @@ fn penetrations(
     opts: &Options,
 ) -> Vec<Found> {
     let hand = world.holds[o].as_ref();
-    let mut worst: Vec<(Owner, f32)> = Vec::new();
+    let mut worst: Vec<(Owner, f32, f32)> = Vec::new();
     for b in others {
-        let skip = match b.owner {
-            Owner::Object(j) => plan.objects[j].movable && j < o,
-            Owner::Link(a, l) => hand.is_some_and(|h| h.agent == a && h.hand.contains(&l)),
-            Owner::Held(_) => true,
+        let limit = match b.owner {
+            Owner::Object(j) if plan.objects[j].movable && j < o => continue,
+            Owner::Held(_) => continue,
+            Owner::Link(a, l) if hand.is_some_and(|h| h.agent == a && h.hand.contains(&l)) => {
+                opts.grasp_depth
+            }
+            _ => opts.depth,
         };
-        if skip {
-            continue;
-        }
         let d = mine.iter().map(|m| depth(m, b)).fold(0.0f32, f32::max);
-        if d > opts.depth {
-            match worst.iter_mut().find(|(w, _)| *w == b.owner) {
+        if d > limit {
+            match worst.iter_mut().find(|(w, _, _)| *w == b.owner) {
                 Some(w) => w.1 = w.1.max(d),
-                None => worst.push((b.owner, d)),
+                None => worst.push((b.owner, d, limit)),
             }
         }
     }
+    let detail = |limit: f32| {
+        if limit == opts.depth {
+            String::new()
+        } else {
+            format!(
+                "held deeper than the {:.0} mm grasp tolerance",
+                limit * 1000.0
+            )
+        }
+    };
     worst
         .into_iter()
-        .map(|(b, d)| ((FaultKind::Penetration, o, b), d * 1000.0, String::new()))
+        .map(|(b, d, limit)| ((FaultKind::Penetration, o, b), d * 1000.0, detail(limit)))
         .collect()
 }
 

@@ -38,7 +38,17 @@ pub struct Sweep<'a> {
     pub held: Option<(usize, Carry)>,
     pub adjacency: &'a Adjacency,
     pub depth: f32,
+    pub grasp_depth: f32,
     pub sub: usize,
+}
+
+/// Which depth tolerance applies to a pair.
+#[derive(Clone, Copy)]
+enum Tolerance {
+    /// Anything but a grasp: `--depth`.
+    Contact,
+    /// A hand and what it grasps: the grasp tolerance.
+    Grasp,
 }
 
 /// Worst fault per (kind, bodies) of one trajectory.
@@ -127,21 +137,25 @@ impl Sweep<'_> {
     ) {
         for (m, body) in bodies.iter().enumerate() {
             for &f in &near[m] {
-                if !self.allowed(body.owner, fixed[f].owner, world) {
-                    self.record(found, c, body, &fixed[f]);
+                if let Some(tol) = self.tolerance(body.owner, fixed[f].owner, world) {
+                    self.record(found, c, body, &fixed[f], tol);
                 }
             }
             for other in &bodies[m + 1..] {
-                if !self.allowed(body.owner, other.owner, world) {
-                    self.record(found, c, body, other);
+                if let Some(tol) = self.tolerance(body.owner, other.owner, world) {
+                    self.record(found, c, body, other, tol);
                 }
             }
         }
     }
 
-    fn record(&self, found: &mut Found, c: &Config, a: &Placed, b: &Placed) {
+    fn record(&self, found: &mut Found, c: &Config, a: &Placed, b: &Placed, tol: Tolerance) {
         let d = depth(a, b);
-        if d <= self.depth {
+        let limit = match tol {
+            Tolerance::Contact => self.depth,
+            Tolerance::Grasp => self.grasp_depth,
+        };
+        if d <= limit {
             return;
         }
         let kind = match (a.owner, b.owner) {
@@ -160,7 +174,13 @@ impl Sweep<'_> {
             b: ob.name(self.plan),
             depth_mm: 0.0,
             configs: 0,
-            detail: String::new(),
+            detail: match tol {
+                Tolerance::Contact => String::new(),
+                Tolerance::Grasp => format!(
+                    "a grasp deeper than the {:.0} mm grasp tolerance",
+                    limit * 1000.0
+                ),
+            },
         });
         f.configs += 1;
         if d * 1000.0 > f.depth_mm {
@@ -169,21 +189,30 @@ impl Sweep<'_> {
         }
     }
 
-    /// Whether two bodies may touch: adjacent links of one agent; the hand that holds an object
-    /// and that object; any grasping link and the step's target object (grasp, release, hand-over).
-    fn allowed(&self, x: Owner, y: Owner, world: &World) -> bool {
+    /// How deep two bodies may interpenetrate (`None`: at will). Adjacent links of one agent
+    /// at will; the hand that holds an object and that object, and any grasping link and the
+    /// step's target object (grasp, release, hand-over; unless another hand of the same agent
+    /// holds it) up to the grasp tolerance; everything else up to the contact tolerance.
+    fn tolerance(&self, x: Owner, y: Owner, world: &World) -> Option<Tolerance> {
         let plan = self.plan;
         match (x, y) {
-            (Owner::Link(p, i), Owner::Link(q, j)) if p == q => self.adjacency.allowed(i, j),
+            (Owner::Link(p, i), Owner::Link(q, j)) if p == q => {
+                (!self.adjacency.allowed(i, j)).then_some(Tolerance::Contact)
+            }
             (Owner::Link(b, l), Owner::Object(o) | Owner::Held(o))
             | (Owner::Object(o) | Owner::Held(o), Owner::Link(b, l)) => {
-                let in_hand = world.holds[o]
-                    .as_ref()
-                    .is_some_and(|h| h.agent == b && h.hand.contains(&l));
+                let hold = world.holds[o].as_ref();
+                let in_hand = hold.is_some_and(|h| h.agent == b && h.hand.contains(&l));
+                let free = hold.is_none_or(|h| h.agent != b);
                 let grasping = is_grasping_link(&plan.agents[b].links[l].name);
-                in_hand || (self.step.target == Some(o) && grasping)
+                let grasp = in_hand || (self.step.target == Some(o) && grasping && free);
+                Some(if grasp {
+                    Tolerance::Grasp
+                } else {
+                    Tolerance::Contact
+                })
             }
-            _ => false,
+            _ => Some(Tolerance::Contact),
         }
     }
 }

@@ -97,6 +97,7 @@ fn run_trajectory(
         held,
         adjacency,
         depth: opts.depth,
+        grasp_depth: opts.grasp_depth,
         sub: opts.sub,
     };
     let (found, configs) = sweep.run(world);

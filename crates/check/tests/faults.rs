@@ -173,6 +173,60 @@ fn held_object_through_object() {
 }
 
 #[test]
+fn a_hand_may_squeeze_what_it_holds_but_not_pass_through_it() {
+    let lift = |palm_over_book: f32| {
+        let mut plan = scene();
+        let frames = [0.77, 0.82]
+            .iter()
+            .map(|&z| {
+                posture(
+                    BOT,
+                    &[("r_gripper_palm_link", [1.0, -0.2, z + palm_over_book])],
+                )
+            })
+            .collect();
+        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+        let traj = trajectory("bot", "lift", frames, Some(("book", held)));
+        push_step(
+            &mut plan,
+            "pick",
+            "book",
+            vec![traj],
+            json!([]),
+            json!([]),
+            json!({ "book": at(1.0, -0.2, 0.82) }),
+        );
+        check(&plan)
+    };
+    // The palm (half height 0.03) 0.045 m over the book's centre (half height 0.02): 5 mm in.
+    let r = lift(0.045);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    // Its centre on the book's top face: 30 mm in, while lifting and at rest after the step.
+    let r = lift(0.02);
+    let got: Vec<_> = r
+        .faults
+        .iter()
+        .map(|f| (f.kind, f.a.as_str(), f.b.as_str()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (FaultKind::Collision, "bot/r_gripper_palm_link", "held book"),
+            (
+                FaultKind::Penetration,
+                "object book",
+                "bot/r_gripper_palm_link"
+            ),
+        ]
+    );
+    assert!(
+        r.faults
+            .iter()
+            .all(|f| f.detail.contains("10 mm grasp tolerance"))
+    );
+}
+
+#[test]
 fn self_collision_of_non_adjacent_links() {
     let mut plan = scene();
     let frames = [0.3, 0.0, -0.18]

@@ -11,8 +11,8 @@ use crate::exit;
     per frame, held poses, object poses after each step) with its own geometry (parry3d), never \
     the planner's collision code. Checks, with SUB interpolated configurations between frames \
     (translation linear, rotation slerp): every link, held object and scene object against each \
-    other (grasping links may touch the object they hold or the step's target; adjacent links of \
-    one agent may touch, see docs/check.md); that every object at rest after a step lies within \
+    other (grasping links may sink up to GRASP_DEPTH into the object they hold or the step's \
+    target; adjacent links of one agent may touch, see docs/check.md); that every object at rest after a step lies within \
     2 mm of a surface under it and penetrates nothing; and re-measures each added or deleted \
     `visible` / `reachable` literal (visible: half of the pixels; reach 0.95 m robot, 0.70 m \
     person), reporting only clear disagreements.\n\nExit codes: 0 clean, 1 faults found, \
@@ -27,18 +27,24 @@ pub struct Args {
     /// Deepest allowed interpenetration, metres.
     #[arg(long, default_value_t = 0.001)]
     pub depth: f32,
+    /// Deepest a hand may sink into the object it grasps, metres.
+    #[arg(long, default_value_t = 0.01)]
+    pub grasp_depth: f32,
     /// Print a machine-readable JSON report instead of text.
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    if !(args.depth.is_finite() && args.depth >= 0.0) {
-        anyhow::bail!("--depth must be a non-negative number of metres");
+    for (name, v) in [("--depth", args.depth), ("--grasp-depth", args.grasp_depth)] {
+        if !(v.is_finite() && v >= 0.0) {
+            anyhow::bail!("{name} must be a non-negative number of metres");
+        }
     }
     let opts = check::Options {
         sub: args.sub as usize,
         depth: args.depth,
+        grasp_depth: args.grasp_depth,
         ..check::Options::default()
     };
     let report = check::check_file(&args.plan, &opts)?;
