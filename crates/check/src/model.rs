@@ -83,6 +83,8 @@ pub struct Step {
 /// A whole plan.
 #[derive(Clone)]
 pub struct Plan {
+    /// `solved`, `unsolvable` or `limit` (absent: `None`).
+    pub status: Option<String>,
     pub objects: Vec<Object>,
     pub agents: Vec<Agent>,
     pub steps: Vec<Step>,

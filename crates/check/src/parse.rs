@@ -135,6 +135,7 @@ fn plan(root: Node) -> Res<Plan> {
         ))
     })?;
     let mut p = Plan {
+        status: root.opt("status", |n| n.str())?,
         objects,
         agents,
         steps: Vec::new(),

@@ -93,6 +93,8 @@ impl fmt::Display for Fault {
 /// The whole verdict on one plan.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Report {
+    /// The plan's own `status`, when it is not `solved` (an unsolved run has no steps to check).
+    pub status: Option<String>,
     pub faults: Vec<Fault>,
     pub steps: usize,
     pub trajectories: usize,
@@ -115,9 +117,13 @@ impl Report {
 
     /// `clean: 0 faults in S steps, T trajectories, F frames` or `N faults: X collisions, ...`.
     pub fn summary(&self) -> String {
+        let status = self
+            .status
+            .as_ref()
+            .map_or(String::new(), |s| format!(" (the plan's status: {s})"));
         if self.faults.is_empty() {
             return format!(
-                "clean: 0 faults in {} steps, {} trajectories, {} frames",
+                "clean: 0 faults in {} steps, {} trajectories, {} frames{status}",
                 self.steps, self.trajectories, self.frames
             );
         }
@@ -127,7 +133,7 @@ impl Report {
             .map(|(k, n)| format!("{n} {}", plural(*k, *n)))
             .collect();
         format!(
-            "{} faults: {} (in {} steps, {} trajectories, {} frames)",
+            "{} faults: {} (in {} steps, {} trajectories, {} frames){status}",
             self.faults.len(),
             parts.join(", "),
             self.steps,

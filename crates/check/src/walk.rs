@@ -18,6 +18,7 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
         .collect();
     let (trajectories, frames) = plan.counts();
     let mut report = Report {
+        status: plan.status.clone().filter(|s| s != "solved"),
         steps: plan.steps.len(),
         trajectories,
         frames,

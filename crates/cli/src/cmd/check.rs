@@ -21,8 +21,8 @@ use crate::exit;
 pub struct Args {
     /// The plan JSON (`htngtp plan --json-out`, `htngtp demo`).
     pub plan: PathBuf,
-    /// Interpolated configurations between consecutive frames (at least 4).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(4..=1000))]
+    /// Interpolated configurations between consecutive frames (4 to 64).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(4..=64))]
     pub sub: u32,
     /// Deepest allowed interpenetration, metres.
     #[arg(long, default_value_t = 0.001)]
@@ -49,7 +49,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let report = check::check_file(&args.plan, &opts)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        let mut v = serde_json::to_value(&report)?;
+        v["summary"] = report.summary().into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         for f in &report.faults {
             println!("{f}");
