@@ -52,6 +52,8 @@ enum Command {
     Facts(cmd::facts::Args),
     /// Run one geometric task (pick, show, give, make-accessible, put-away, ...) in a scene.
     Gtp(cmd::gtp::Args),
+    /// Re-check a plan JSON's geometry independently: collisions, support, literals.
+    Check(cmd::check::Args),
     /// Serve the 3D web viewer and a plan JSON on 127.0.0.1, and print the URL to open.
     View(cmd::view::Args),
 }
@@ -79,6 +81,7 @@ fn main() -> ExitCode {
         Command::Facts(args) => cmd::facts::run(args),
         Command::Gtp(args) => cmd::gtp::run(args),
         Command::View(args) => cmd::view::run(args),
+        Command::Check(args) => cmd::check::run(args),
     };
     match result {
         Ok(code) => ExitCode::from(code),

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_hddl;
+pub mod check;
 pub mod demo;
 pub mod facts;
 pub mod geo;

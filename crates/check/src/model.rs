@@ -1,0 +1,116 @@
+//! The checker's own typed view of a plan JSON (`docs/plan-json.md`): only what the file declares,
+//! names resolved to indices once so the sweeps work on plain vectors.
+
+use parry3d::math::Pose;
+use parry3d::shape::SharedShape;
+
+/// One primitive of a body, posed in its owner's frame (object or link).
+#[derive(Clone)]
+pub struct Part {
+    pub shape: SharedShape,
+    pub pose: Pose,
+}
+
+/// A scene object: furniture or a movable thing.
+#[derive(Clone)]
+pub struct Object {
+    pub name: String,
+    pub movable: bool,
+    pub parts: Vec<Part>,
+    /// Initial pose.
+    pub pose: Pose,
+}
+
+/// Robot or person.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AgentKind {
+    Robot,
+    Human,
+}
+
+/// One link of an agent and its shapes (possibly none).
+#[derive(Clone)]
+pub struct Link {
+    pub name: String,
+    pub parts: Vec<Part>,
+}
+
+/// An agent: its links and its initial posture (`link_poses`, one pose per link).
+#[derive(Clone)]
+pub struct Agent {
+    pub name: String,
+    pub kind: AgentKind,
+    /// Index of the `eye_link`, when declared.
+    pub eye: Option<usize>,
+    pub links: Vec<Link>,
+    pub link_poses: Vec<Pose>,
+}
+
+/// One frame of a trajectory: every link's pose, and the held object's pose when holding.
+#[derive(Clone)]
+pub struct Frame {
+    pub link_poses: Vec<Pose>,
+    pub held_pose: Option<Pose>,
+}
+
+/// One trajectory of a GS step.
+#[derive(Clone)]
+pub struct Trajectory {
+    pub agent: usize,
+    pub label: String,
+    /// Object index declared in `holding`.
+    pub holding: Option<usize>,
+    pub frames: Vec<Frame>,
+}
+
+/// A literal as the JSON writes it: predicate then arguments.
+pub type Literal = Vec<String>;
+
+/// One primitive action of the plan.
+#[derive(Clone)]
+pub struct Step {
+    pub index: usize,
+    pub action: String,
+    pub added: Vec<Literal>,
+    pub deleted: Vec<Literal>,
+    /// The GS task's first argument (the object it is about), if any.
+    pub target: Option<usize>,
+    pub trajectories: Vec<Trajectory>,
+    /// Poses of movable objects after the step (object index, pose).
+    pub object_poses: Vec<(usize, Pose)>,
+}
+
+/// A whole plan.
+#[derive(Clone)]
+pub struct Plan {
+    /// `solved`, `unsolvable` or `limit` (absent: `None`).
+    pub status: Option<String>,
+    pub objects: Vec<Object>,
+    pub agents: Vec<Agent>,
+    pub steps: Vec<Step>,
+}
+
+impl Plan {
+    /// Index of the object called `name`.
+    pub fn object(&self, name: &str) -> Option<usize> {
+        self.objects.iter().position(|o| o.name == name)
+    }
+
+    /// Index of the agent called `name`.
+    pub fn agent(&self, name: &str) -> Option<usize> {
+        self.agents.iter().position(|a| a.name == name)
+    }
+
+    /// Number of trajectories and frames in the plan.
+    pub fn counts(&self) -> (usize, usize) {
+        let trajs = self.steps.iter().flat_map(|s| &s.trajectories);
+        trajs.fold((0, 0), |(t, f), tr| (t + 1, f + tr.frames.len()))
+    }
+}
+
+impl Agent {
+    /// Index of the link called `name`.
+    pub fn link(&self, name: &str) -> Option<usize> {
+        self.links.iter().position(|l| l.name == name)
+    }
+}

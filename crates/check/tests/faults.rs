@@ -1,0 +1,599 @@
+//! `check` on hand-made plans: one clean plan, and one plan per kind of fault, each asserting
+//! the exact fault kinds and bodies.
+
+mod common;
+
+use check::{FaultKind, InputError, Options};
+use common::*;
+use serde_json::json;
+
+/// The robot reaches over the desk and back; it sees and can reach the book.
+fn clean_plan() -> serde_json::Value {
+    let mut plan = scene();
+    let frames = (0..=4)
+        .map(|i| {
+            let x = 0.5 + 0.1 * i as f32;
+            posture(
+                BOT,
+                &[
+                    ("r_gripper_palm_link", [x, -0.2, 1.0]),
+                    ("r_gripper_l_finger_link", [x, -0.25, 1.0]),
+                ],
+            )
+        })
+        .collect();
+    let traj = trajectory("bot", "approach", frames, None);
+    let added = json!([
+        ["visible", "book", "bot"],
+        ["reachable", "book", "bot"],
+        ["visible", "book", "member"]
+    ]);
+    push_step(
+        &mut plan,
+        "show",
+        "book",
+        vec![traj],
+        added,
+        json!([]),
+        json!({}),
+    );
+    plan
+}
+
+#[test]
+fn clean_plan_has_no_fault() {
+    let r = check(&clean_plan());
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    assert_eq!(r.literals, 3);
+    assert_eq!(r.frames, 5);
+    assert_eq!(r.configs, 4 * 5 + 1, "4 sub-frames between 5 frames");
+    assert!(
+        r.summary()
+            .starts_with("clean: 0 faults in 1 steps, 1 trajectories, 5 frames")
+    );
+}
+
+#[test]
+fn link_through_object() {
+    let mut plan = scene();
+    let frames = [1.0, 0.85, 0.72]
+        .iter()
+        .map(|&z| posture(BOT, &[("r_forearm_link", [0.9, -0.4, z])]))
+        .collect();
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![trajectory("bot", "approach", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    let r = check(&plan);
+    let f = only(&r);
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (FaultKind::Collision, "bot/r_forearm_link", "object desk")
+    );
+    assert_eq!(
+        (f.step, f.trajectory.as_deref(), f.frame.as_deref()),
+        (Some(0), Some("approach"), Some("2"))
+    );
+    // the capsule (radius 0.04) at z 0.72 spans 0.68..0.76 in the slab 0.71..0.75: pushing it
+    // out downwards is the shorter way, 0.05 m
+    assert!((f.depth_mm - 50.0).abs() < 1.0, "{}", f.depth_mm);
+    assert_eq!(
+        r.summary(),
+        "1 faults: 1 collision (in 1 steps, 1 trajectories, 3 frames)"
+    );
+}
+
+#[test]
+fn motion_between_frames_is_checked() {
+    let mut plan = scene();
+    // Above the desk, then below it: neither frame touches the 4 cm slab, the motion does.
+    let frames = [1.0, 0.5]
+        .iter()
+        .map(|&z| posture(BOT, &[("r_forearm_link", [0.9, -0.4, z])]))
+        .collect();
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![trajectory("bot", "approach", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    let f = only(&check(&plan)).clone();
+    assert_eq!(
+        (f.kind, f.b.as_str()),
+        (FaultKind::Collision, "object desk")
+    );
+    assert_eq!(f.frame.as_deref(), Some("0+0.60"));
+    let opts = Options {
+        sub: 9,
+        ..Options::default()
+    };
+    let f = only(&check_with(&plan, &opts)).clone();
+    assert!(
+        f.frame.as_deref().is_some_and(|fr| fr.starts_with("0+0.")),
+        "{:?}",
+        f.frame
+    );
+}
+
+/// The robot lifts the book and carries it through the monitor; returns the plan and the
+/// (palm, held) path used.
+fn carry_through_monitor() -> serde_json::Value {
+    let mut plan = scene();
+    let path: Vec<[f32; 3]> = vec![
+        [1.0, -0.2, 0.77],
+        [1.0, -0.2, 0.82],
+        [1.0, 0.1, 0.82],
+        [1.0, 0.3, 0.82],
+        [1.0, 0.6, 0.82],
+    ];
+    let frames = path
+        .iter()
+        .map(|p| {
+            posture(
+                BOT,
+                &[
+                    ("r_gripper_palm_link", [p[0], p[1], p[2] + 0.1]),
+                    ("r_gripper_l_finger_link", [p[0], p[1] - 0.05, p[2] + 0.1]),
+                ],
+            )
+        })
+        .collect();
+    let held = path.iter().map(|p| at(p[0], p[1], p[2])).collect();
+    let traj = trajectory("bot", "lift", frames, Some(("book", held)));
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![traj],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, 0.6, 0.82) }),
+    );
+    plan
+}
+
+#[test]
+fn held_object_through_object() {
+    let r = check(&carry_through_monitor());
+    let f = only(&r);
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (FaultKind::Collision, "object monitor", "held book")
+    );
+    assert_eq!(f.trajectory.as_deref(), Some("lift"));
+    assert!(f.depth_mm > 30.0, "{}", f.depth_mm);
+}
+
+#[test]
+fn a_hand_may_squeeze_what_it_holds_but_not_pass_through_it() {
+    let lift = |palm_over_book: f32| {
+        let mut plan = scene();
+        let frames = [0.77, 0.82]
+            .iter()
+            .map(|&z| {
+                posture(
+                    BOT,
+                    &[("r_gripper_palm_link", [1.0, -0.2, z + palm_over_book])],
+                )
+            })
+            .collect();
+        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+        let traj = trajectory("bot", "lift", frames, Some(("book", held)));
+        push_step(
+            &mut plan,
+            "pick",
+            "book",
+            vec![traj],
+            json!([]),
+            json!([]),
+            json!({ "book": at(1.0, -0.2, 0.82) }),
+        );
+        check(&plan)
+    };
+    // The palm (half height 0.03) 0.045 m over the book's centre (half height 0.02): 5 mm in.
+    let r = lift(0.045);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    // Its centre on the book's top face: 30 mm in, while lifting and at rest after the step.
+    let r = lift(0.02);
+    let got: Vec<_> = r
+        .faults
+        .iter()
+        .map(|f| (f.kind, f.a.as_str(), f.b.as_str()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (FaultKind::Collision, "bot/r_gripper_palm_link", "held book"),
+            (
+                FaultKind::Penetration,
+                "object book",
+                "bot/r_gripper_palm_link"
+            ),
+        ]
+    );
+    assert!(
+        r.faults
+            .iter()
+            .all(|f| f.detail.contains("10 mm grasp tolerance"))
+    );
+}
+
+#[test]
+fn self_collision_of_non_adjacent_links() {
+    let mut plan = scene();
+    let frames = [0.3, 0.0, -0.18]
+        .iter()
+        .map(|&y| posture(BOT, &[("l_gripper_palm_link", [0.5, y, 1.0])]))
+        .collect();
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![trajectory("bot", "approach", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    let f = only(&check(&plan)).clone();
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (
+            FaultKind::SelfCollision,
+            "bot/r_gripper_palm_link",
+            "bot/l_gripper_palm_link"
+        )
+    );
+    // the boxes overlap 0.04 m in y (0.06 in x and z)
+    assert!((f.depth_mm - 40.0).abs() < 0.5, "{}", f.depth_mm);
+}
+
+/// The palm and finger in the right hand move from `y0` to `y1` (finger's y).
+fn finger_moves(initial_y: f32, to_y: f32) -> check::Report {
+    let mut plan = scene();
+    let lp = &mut plan["scene"]["agents"][0]["link_poses"]["r_gripper_l_finger_link"]["t"];
+    *lp = json!([0.5, initial_y, 1.0]);
+    let frames = [initial_y, to_y]
+        .iter()
+        .map(|&y| posture(BOT, &[("r_gripper_l_finger_link", [0.5, y, 1.0])]))
+        .collect();
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![trajectory("bot", "grasp", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    check(&plan)
+}
+
+#[test]
+fn links_touching_in_the_initial_posture_are_adjacent() {
+    // The finger starts against the palm (y -0.235 +- 0.005, palm from -0.23): adjacent.
+    let r = finger_moves(-0.235, -0.215);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    // 15 mm apart at first and moving in the palm's frame: not adjacent.
+    let r = finger_moves(-0.25, -0.215);
+    let f = only(&r);
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (
+            FaultKind::SelfCollision,
+            "bot/r_gripper_palm_link",
+            "bot/r_gripper_l_finger_link"
+        )
+    );
+}
+
+#[test]
+fn links_joined_by_a_joint_are_adjacent() {
+    let mut plan = scene();
+    // The forearm turns about its origin, which stays 3 cm in front of the upper arm's end: the
+    // origin is fixed in the upper arm's frame over every frame, so the pair is adjacent even
+    // though they were apart at first and touch when bent.
+    let start = [0.47, -0.2, 1.0];
+    plan["scene"]["agents"][0]["link_poses"]["r_forearm_link"]["t"] = json!(start);
+    let bend = |angle: f32| {
+        let mut p = posture(BOT, &[("r_forearm_link", start)]);
+        let (s, c) = (0.5 * angle).sin_cos();
+        p["r_forearm_link"]["q"] = json!([0.0, 0.0, s, c]);
+        p
+    };
+    let frames = [0.0f32, 1.5, 3.0].iter().map(|&a| bend(a)).collect();
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![trajectory("bot", "bend", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    let r = check(&plan);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+}
+
+#[test]
+fn person_through_furniture() {
+    let mut plan = scene();
+    let frames = [[1.7, -0.2, 0.9], [1.5, -0.2, 0.8], [1.3, -0.2, 0.74]]
+        .iter()
+        .map(|&p| posture(MEMBER, &[("r_hand_link", p)]))
+        .collect();
+    push_step(
+        &mut plan,
+        "waittake",
+        "book",
+        vec![trajectory("member", "reach", frames, None)],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    let f = only(&check(&plan)).clone();
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (FaultKind::Collision, "member/r_hand_link", "object desk")
+    );
+    assert_eq!(f.trajectory.as_deref(), Some("reach"));
+}
+
+#[test]
+fn floating_object() {
+    let mut plan = scene();
+    push_step(
+        &mut plan,
+        "place",
+        "book",
+        vec![],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, -0.2, 0.78) }),
+    );
+    let r = check(&plan);
+    let f = only(&r);
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.step),
+        (FaultKind::Unsupported, "object book", Some(0))
+    );
+    assert!((f.depth_mm - 10.0).abs() < 0.1, "gap {}", f.depth_mm);
+    assert!(f.detail.contains("object desk"), "{}", f.detail);
+}
+
+#[test]
+fn resting_within_the_gap_is_supported() {
+    let mut plan = scene();
+    push_step(
+        &mut plan,
+        "place",
+        "book",
+        vec![],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, -0.2, 0.7715) }),
+    );
+    let r = check(&plan);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+}
+
+#[test]
+fn object_inside_another() {
+    let mut plan = scene();
+    push_step(
+        &mut plan,
+        "put-away",
+        "book",
+        vec![],
+        json!([]),
+        json!([]),
+        json!({ "book": at(0.0, 1.0, 0.1) }),
+    );
+    let r = check(&plan);
+    let f = only(&r);
+    assert_eq!(
+        (f.kind, f.a.as_str(), f.b.as_str()),
+        (FaultKind::Penetration, "object book", "object bin")
+    );
+    // the book's bottom (0.08) is 0.12 m under the bin's top (0.2)
+    assert!((f.depth_mm - 120.0).abs() < 1.0, "{}", f.depth_mm);
+}
+
+#[test]
+fn persisting_rest_faults_are_reported_once() {
+    let mut plan = scene();
+    push_step(
+        &mut plan,
+        "put-away",
+        "book",
+        vec![],
+        json!([]),
+        json!([]),
+        json!({ "book": at(0.0, 1.0, 0.1) }),
+    );
+    push_step(
+        &mut plan,
+        "say",
+        "book",
+        vec![],
+        json!([]),
+        json!([]),
+        json!({}),
+    );
+    assert_eq!(check(&plan).faults.len(), 1);
+}
+
+#[test]
+fn stale_literals() {
+    let mut plan = scene();
+    // A screen between the robot's camera and the book.
+    plan["scene"]["objects"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({
+        "name": "screen", "movable": false,
+        "shape": { "box": { "half_extents": [0.02, 0.6, 0.5] } }, "pose": at(0.45, 0.0, 1.25) }));
+    let added = json!([["visible", "book", "bot"], ["reachable", "book", "member"]]);
+    let deleted = json!([["visible", "book", "member"]]);
+    push_step(&mut plan, "show", "book", vec![], added, deleted, json!({}));
+    // The book put down near the robot's shoulder (0.45 m), and "not reachable".
+    let near = json!({ "book": at(0.6, -0.2, 0.77) });
+    push_step(
+        &mut plan,
+        "place",
+        "book",
+        vec![],
+        json!([]),
+        json!([["reachable", "book", "bot"]]),
+        near,
+    );
+    let r = check(&plan);
+    let got: Vec<_> = r
+        .faults
+        .iter()
+        .map(|f| (f.kind, f.a.as_str(), f.b.as_str()))
+        .collect();
+    let want = vec![
+        (FaultKind::StaleLiteral, "(visible book bot)", "added"),
+        (FaultKind::StaleLiteral, "(reachable book member)", "added"),
+        (FaultKind::StaleLiteral, "(visible book member)", "deleted"),
+        (FaultKind::StaleLiteral, "(reachable book bot)", "deleted"),
+    ];
+    assert_eq!(got, want);
+    assert!(
+        r.faults[0].detail.contains("0.00"),
+        "{}",
+        r.faults[0].detail
+    );
+}
+
+#[test]
+fn undeclared_carry_is_a_fault_and_checked_as_carried() {
+    let mut plan = scene();
+    // Lift the book in the right gripper (declared) ...
+    let lift = vec![
+        posture(
+            BOT,
+            &[
+                ("r_gripper_palm_link", [1.0, -0.2, 0.87]),
+                ("r_gripper_l_finger_link", [1.0, -0.25, 0.87]),
+            ],
+        ),
+        posture(
+            BOT,
+            &[
+                ("r_gripper_palm_link", [1.0, -0.2, 0.92]),
+                ("r_gripper_l_finger_link", [1.0, -0.25, 0.92]),
+            ],
+        ),
+    ];
+    let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+    let lift = trajectory("bot", "lift", lift, Some(("book", held)));
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![lift],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, -0.2, 0.82) }),
+    );
+    // ... then drive it through the monitor saying `holding: null`.
+    let drive = [-0.2, 0.3, 0.6]
+        .iter()
+        .map(|&y| {
+            posture(
+                BOT,
+                &[
+                    ("r_gripper_palm_link", [1.0, y, 0.92]),
+                    ("r_gripper_l_finger_link", [1.0, y - 0.05, 0.92]),
+                ],
+            )
+        })
+        .collect();
+    let drive = trajectory("bot", "drive", drive, None);
+    push_step(
+        &mut plan,
+        "navto",
+        "desk",
+        vec![drive],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, 0.6, 0.82) }),
+    );
+    let r = check(&plan);
+    let got: Vec<_> = r
+        .faults
+        .iter()
+        .map(|f| (f.kind, f.step, f.a.as_str(), f.b.as_str()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (
+                FaultKind::UndeclaredCarry,
+                Some(1),
+                "bot/r_gripper_palm_link",
+                "held book"
+            ),
+            (FaultKind::Collision, Some(1), "object monitor", "held book"),
+        ]
+    );
+}
+
+#[test]
+fn bad_json_names_file_line_and_column() {
+    let err = check::parse_plan("{\n  \"scene\": [1,\n}", "plan.json")
+        .err()
+        .expect("an error");
+    match &err {
+        InputError::Syntax { file, line, .. } => {
+            assert_eq!((file.as_str(), *line), ("plan.json", 3))
+        }
+        other => panic!("{other}"),
+    }
+    assert!(
+        err.to_string()
+            .starts_with("plan.json: not valid JSON at line 3, column"),
+        "{err}"
+    );
+}
+
+#[test]
+fn missing_key_names_its_path() {
+    let mut plan = carry_through_monitor();
+    plan["steps"][0]["gtp"]["trajectories"][0]["frames"][2]["link_poses"]["camera"]
+        .as_object_mut()
+        .unwrap()
+        .remove("q");
+    let err = check::parse_plan(&plan.to_string(), "p.json")
+        .err()
+        .expect("an error");
+    assert_eq!(
+        err.to_string(),
+        "missing key `steps[0].gtp.trajectories[0].frames[2].link_poses.camera.q`"
+    );
+}
+
+#[test]
+fn unknown_names_and_bad_values_are_bad_input() {
+    let mut plan = clean_plan();
+    plan["steps"][0]["gtp"]["trajectories"][0]["agent"] = json!("nobody");
+    let err = check::parse_plan(&plan.to_string(), "p.json")
+        .err()
+        .expect("an error");
+    assert!(err.to_string().contains("no agent `nobody`"), "{err}");
+    let mut plan = scene();
+    plan["scene"]["objects"][3]["shape"]["box"]["half_extents"] = json!([0.1, -1, 0.1]);
+    let err = check::parse_plan(&plan.to_string(), "p.json")
+        .err()
+        .expect("an error");
+    assert!(matches!(err, InputError::Bad { .. }), "{err}");
+}

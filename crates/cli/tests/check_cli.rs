@@ -1,0 +1,94 @@
+//! `htngtp check` as a user runs it: exit codes, the summary line, the JSON report, on a plan
+//! the binary itself produces and on bad input. Whether the planner's plan is clean is not
+//! asserted (that is the planner's business); only that the checker reads it and answers.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn htngtp() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_htngtp"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("htngtp-check-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir.join(name)
+}
+
+#[test]
+fn checks_a_plan_the_planner_wrote() {
+    let lib = root().join("domains/library");
+    let plan = temp("plan.json");
+    let status = htngtp()
+        .args(["plan"])
+        .arg(lib.join("domain.hddl"))
+        .arg(lib.join("lend-and-debit.hddl"))
+        .arg("--scene")
+        .arg(lib.join("scene.toml"))
+        .args(["--strategy", "symbolic", "--seed", "1", "--json-out"])
+        .arg(&plan)
+        .output()
+        .expect("runs");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let out = htngtp().arg("check").arg(&plan).output().expect("runs");
+    let code = out.status.code();
+    assert!(matches!(code, Some(0 | 1)), "exit {code:?}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let last = text.lines().last().unwrap_or_default();
+    let summary_ok = if code == Some(0) {
+        last.starts_with("clean: 0 faults in 9 steps")
+    } else {
+        last.contains(" faults: ")
+    };
+    assert!(summary_ok, "{last}");
+    let out = htngtp()
+        .args(["check", "--json"])
+        .arg(&plan)
+        .output()
+        .expect("runs");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
+    assert_eq!(v["steps"], 9);
+    assert!(v["frames"].as_u64().is_some_and(|f| f > 100));
+}
+
+#[test]
+fn bad_input_exits_3_with_the_place() {
+    let bad = temp("bad.json");
+    std::fs::write(&bad, "{\n  \"scene\": {\n    \"objects\": [1,]\n").expect("write");
+    let out = htngtp().arg("check").arg(&bad).output().expect("runs");
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.json: not valid JSON at line 3, column"),
+        "{err}"
+    );
+
+    std::fs::write(&bad, r#"{"scene": {"objects": [], "agents": []}}"#).expect("write");
+    let out = htngtp().arg("check").arg(&bad).output().expect("runs");
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing key `steps`"));
+
+    let out = htngtp()
+        .args(["check", "/nonexistent/plan.json"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(3));
+    let out = htngtp()
+        .args(["check", "--sub", "2"])
+        .arg(&bad)
+        .output()
+        .expect("runs");
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "fewer than 4 sub-frames is refused"
+    );
+}
