@@ -103,6 +103,8 @@ pub struct RunRecord {
     pub time_s: f64,
     /// Per GTP task.
     pub tasks: BTreeMap<String, TaskStats>,
+    /// Why the run's plan JSON could not be written (with `plans`).
+    pub plan_file_error: Option<String>,
 }
 
 /// The whole experiment: its runs and their totals (the paper's Table II and run figures).
@@ -193,6 +195,8 @@ pub struct ExperimentOptions {
     pub fixed: bool,
     pub randomization: Randomization,
     pub run: RunOptions,
+    /// Write each solved run's plan JSON here (`{strategy}-{index:03}.json`), for checking.
+    pub plans: Option<std::path::PathBuf>,
 }
 
 /// Runs the experiment on all cores (one run per task of rayon's pool), calling `progress`
@@ -236,7 +240,14 @@ pub fn run_experiment(
                         }
                         Outcome::LimitReached { limit } => (false, format!("limit: {limit}"), 0),
                     };
+                    let plan_file_error = match (&options.plans, solved) {
+                        (Some(dir), true) => {
+                            write_plan(&run, domain, problem, dir, strategy_name, i).err()
+                        }
+                        _ => None,
+                    };
                     RunRecord {
+                        plan_file_error,
                         index: i,
                         seed,
                         solved,
@@ -249,6 +260,7 @@ pub fn run_experiment(
                     }
                 }
                 Err(e) => RunRecord {
+                    plan_file_error: None,
                     index: i,
                     seed,
                     solved: false,
@@ -269,4 +281,19 @@ pub fn run_experiment(
         runs,
         wall_time_s: start.elapsed().as_secs_f64(),
     }
+}
+
+/// Writes a run's plan JSON as `dir/{strategy}-{index:03}.json`.
+fn write_plan(
+    run: &crate::run::Run,
+    domain: &Domain,
+    problem: &Problem,
+    dir: &std::path::Path,
+    strategy: &str,
+    index: usize,
+) -> Result<(), String> {
+    let path = dir.join(format!("{strategy}-{index:03}.json"));
+    let json = crate::export::plan_json(run, &domain.name, &problem.name);
+    let text = serde_json::to_string(&json).map_err(|e| e.to_string())?;
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
 }

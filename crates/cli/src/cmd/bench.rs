@@ -75,6 +75,10 @@ pub struct LibraryArgs {
     /// experiment), e.g. to retrace a failure with `HTNGTP_TRACE=1`.
     #[arg(long, value_name = "INDEX")]
     pub only: Option<usize>,
+    /// Write each solved run's plan JSON into this folder (`STRATEGY-INDEX.json`), for
+    /// `htngtp check` or the viewer.
+    #[arg(long, value_name = "DIR")]
+    pub plans: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
@@ -127,6 +131,9 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    if let Some(dir) = &args.plans {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let mut results = Vec::new();
     for (s, name) in strategies {
         let bar = indicatif::ProgressBar::new(if args.only.is_some() {
@@ -148,6 +155,7 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
             seed: args.seed,
             fixed: args.fixed,
             randomization: Randomization::default(),
+            plans: args.plans.clone(),
             run: RunOptions {
                 planner: PlannerOptions {
                     strategy: s,
@@ -165,6 +173,13 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
         results.push(e);
     }
     for e in &results {
+        if let Some(r) = e.runs.iter().find(|r| r.plan_file_error.is_some()) {
+            anyhow::bail!(
+                "run {}: the plan JSON was not written: {}",
+                r.index,
+                r.plan_file_error.as_deref().unwrap_or_default()
+            );
+        }
         print_experiment(e, args.fixed);
         write_files(e, &args.out)?;
     }
