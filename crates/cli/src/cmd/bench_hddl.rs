@@ -32,7 +32,7 @@ pub struct Args {
     /// The benchmark directory (one folder per domain).
     pub dir: PathBuf,
     /// Seconds per problem.
-    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    #[arg(long, default_value_t = 10.0, value_name = "S", value_parser = crate::input::seconds)]
     pub time_limit: f64,
     /// Memory limit per problem, MiB.
     #[arg(long, default_value_t = 2048, value_name = "MB")]
@@ -164,7 +164,7 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
         s
     });
     // The child stops itself at the limit; a hard stop a little later catches a hang.
-    let hard = Duration::from_secs_f64(args.time_limit + 10.0);
+    let hard = crate::input::duration(args.time_limit + 10.0);
     let status = loop {
         match child.try_wait() {
             Ok(Some(s)) => break Some(s),

@@ -1,7 +1,6 @@
 //! `htngtp plan`: plan an HDDL problem with the HTN planner, validate the plan, print it.
 
 use std::path::PathBuf;
-use std::time::Duration;
 
 use anyhow::Context;
 use htn::planner::{Limits, Outcome, PlannerOptions, Strategy};
@@ -22,15 +21,19 @@ pub struct Args {
     pub domain: PathBuf,
     /// The HDDL problem file.
     pub problem: PathBuf,
-    /// Stop after this many seconds.
-    #[arg(long, value_name = "S")]
-    pub time_limit: Option<f64>,
+    /// Stop after this many seconds (above 0, at most a year). Checked inside the search's
+    /// every node, inside each geometric task call, and after parsing and compiling.
+    #[arg(long, value_name = "S", default_value_t = DEFAULT_TIME_LIMIT_S,
+          value_parser = crate::input::seconds)]
+    pub time_limit: f64,
     /// Stop after expanding this many search nodes.
     #[arg(long, value_name = "N")]
     pub node_limit: Option<u64>,
-    /// Stop when the process's resident memory exceeds this many MiB.
-    #[arg(long, value_name = "MB")]
-    pub memory_limit: Option<u64>,
+    /// Stop when the process's resident memory exceeds this many MiB (checked every 10 ms
+    /// of search).
+    #[arg(long, value_name = "MB", default_value_t = DEFAULT_MEMORY_LIMIT_MB,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub memory_limit: u64,
     /// Seed of the search (it is deterministic for a given seed).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -67,6 +70,11 @@ pub struct Args {
     pub best_first_share: f64,
 }
 
+/// The default `--time-limit`: nothing runs unbounded.
+pub const DEFAULT_TIME_LIMIT_S: f64 = 300.0;
+/// The default `--memory-limit`, MiB (8 GiB).
+pub const DEFAULT_MEMORY_LIMIT_MB: u64 = 8192;
+
 fn share(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
@@ -86,13 +94,15 @@ pub enum StrategyArg {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    let scene = args.scene.as_deref();
+    crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
     let domain = htn::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let options = PlannerOptions {
         limits: Limits {
-            time: args.time_limit.map(Duration::from_secs_f64),
+            time: Some(crate::input::duration(args.time_limit)),
             nodes: args.node_limit,
-            memory_mb: args.memory_limit,
+            memory_mb: Some(args.memory_limit),
         },
         seed: args.seed,
         strategy: match args.strategy {
