@@ -237,3 +237,89 @@ fn a_far_away_person_is_an_error_with_its_key_path() {
         stderr(&o)
     );
 }
+
+/// The children of process `pid` (all its threads'), from /proc.
+fn children(pid: u32) -> Vec<u32> {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return Vec::new();
+    };
+    tasks
+        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("children")).ok())
+        .flat_map(|s| {
+            s.split_whitespace()
+                .filter_map(|p| p.parse().ok())
+                .collect::<Vec<u32>>()
+        })
+        .collect()
+}
+
+fn alive(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+        !s.rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z')
+    })
+}
+
+/// Polls `done` every 20 ms for up to 20 s (a liveness bound, not a measurement).
+fn eventually(mut done: impl FnMut() -> bool) -> bool {
+    (0..1000).any(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        done()
+    })
+}
+
+/// SIGTERM to `bench-hddl` ends the child planner too, and the CSV keeps the finished rows.
+#[test]
+fn bench_hddl_interrupted_keeps_its_rows_and_leaves_no_child() {
+    let dir = scratch("bench-hddl");
+    let tiny = dir.join("a-tiny");
+    std::fs::create_dir_all(&tiny).unwrap();
+    tiny_problem(&tiny);
+    std::fs::rename(tiny.join("problem.hddl"), tiny.join("p01.hddl")).unwrap();
+    let endless = dir.join("b-counter");
+    std::fs::create_dir_all(&endless).unwrap();
+    let htn_tests = root().join("crates/htn/tests/domains");
+    std::fs::copy(
+        htn_tests.join("counter-domain.hddl"),
+        endless.join("domain.hddl"),
+    )
+    .unwrap();
+    std::fs::copy(htn_tests.join("counter.hddl"), endless.join("p01.hddl")).unwrap();
+    let csv = dir.join("rows.csv");
+    let mut bench = Command::new(EXE)
+        .args([
+            "bench-hddl",
+            s(&dir),
+            "--time-limit",
+            "120",
+            "--csv",
+            s(&csv),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut child = None;
+    let started = eventually(|| {
+        child = children(bench.id()).into_iter().find(|&c| {
+            std::fs::read(format!("/proc/{c}/cmdline"))
+                .is_ok_and(|b| String::from_utf8_lossy(&b).contains("b-counter"))
+        });
+        child.is_some()
+    });
+    assert!(started, "the endless problem's planner never started");
+    let child = child.unwrap();
+    let killed = Command::new("kill").arg(bench.id().to_string()).status();
+    assert!(killed.unwrap().success());
+    bench.wait().unwrap();
+    assert!(
+        eventually(|| !alive(child)),
+        "the child planner {child} outlived bench-hddl"
+    );
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    assert!(rows.starts_with("domain,problem,status,"), "{rows}");
+    assert!(rows.contains("\na-tiny,p01.hddl,found,"), "{rows}");
+}

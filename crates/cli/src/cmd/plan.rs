@@ -68,6 +68,22 @@ pub struct Args {
     /// plan (0 turns the fallback off, 1 starts with it).
     #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
     pub best_first_share: f64,
+    /// End as soon as stdin closes: `bench-hddl` gives its children a pipe that closes when it
+    /// ends, however it ends (a signal, even SIGKILL), so no child outlives it.
+    #[arg(long, hide = true)]
+    pub exit_with_stdin: bool,
+}
+
+/// With `--exit-with-stdin`: a thread that ends the process when stdin reaches its end.
+fn exit_when_stdin_closes() {
+    std::thread::spawn(|| {
+        use std::io::Read;
+        let mut buf = [0u8; 64];
+        let mut stdin = std::io::stdin();
+        while matches!(stdin.read(&mut buf), Ok(n) if n > 0) {}
+        eprintln!("stopped: the parent process ended");
+        std::process::exit(exit::LIMIT.into());
+    });
 }
 
 /// The default `--time-limit`: nothing runs unbounded.
@@ -94,6 +110,9 @@ pub enum StrategyArg {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    if args.exit_with_stdin {
+        exit_when_stdin_closes();
+    }
     let scene = args.scene.as_deref();
     crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
     let domain = htn::load_domain(&args.domain)?;
