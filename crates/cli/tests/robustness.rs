@@ -138,6 +138,14 @@ fn writing_to_a_full_disk_is_an_error_not_a_panic() {
 fn a_closed_output_pipe_ends_quietly() {
     let dir = scratch("closed-pipe");
     let (d, p) = tiny_problem(&dir);
+    // A plan longer than a pipe's buffer: the planner cannot finish writing before the pipe
+    // is closed, whoever the scheduler runs first.
+    let tasks = "(go) ".repeat(10_000);
+    std::fs::write(
+        &p,
+        format!("(define (problem p) (:domain tiny) (:htn :parameters () :ordered-subtasks (and {tasks})) (:init))"),
+    )
+    .unwrap();
     let mut child = Command::new(EXE)
         .args(["plan", s(&d), s(&p)])
         .stdout(Stdio::piped())
@@ -322,4 +330,25 @@ fn bench_hddl_interrupted_keeps_its_rows_and_leaves_no_child() {
     let rows = std::fs::read_to_string(&csv).unwrap();
     assert!(rows.starts_with("domain,problem,status,"), "{rows}");
     assert!(rows.contains("\na-tiny,p01.hddl,found,"), "{rows}");
+}
+
+/// An endless search (a count that only grows) stops at the memory limit, says so, and its
+/// peak resident memory stays within 50 MiB of the limit.
+#[test]
+fn the_memory_limit_stops_an_endless_search_near_the_limit() {
+    let htn_tests = root().join("crates/htn/tests/domains");
+    let (d, p) = (
+        htn_tests.join("counter-domain.hddl"),
+        htn_tests.join("counter.hddl"),
+    );
+    let o = run(
+        &["plan", s(&d), s(&p), "--memory-limit", "120", "--json"],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["status"], "limit-reached");
+    assert_eq!(v["limit"], "memory");
+    let peak_mib = v["peak_memory_kb"].as_u64().unwrap() / 1024;
+    assert!(peak_mib <= 120 + 50, "peak {peak_mib} MiB");
 }

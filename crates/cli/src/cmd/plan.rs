@@ -115,11 +115,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     }
     let scene = args.scene.as_deref();
     crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
+    let began = std::time::Instant::now();
     let domain = htn::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let options = PlannerOptions {
         limits: Limits {
-            time: Some(crate::input::duration(args.time_limit)),
+            // The time limit covers parsing: the planner gets what is left.
+            time: Some(crate::input::duration(args.time_limit).saturating_sub(began.elapsed())),
             nodes: args.node_limit,
             memory_mb: Some(args.memory_limit),
         },

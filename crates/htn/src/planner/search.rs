@@ -26,6 +26,9 @@ const LOOP_WINDOW: usize = 32;
 /// An unknown argument in a partially ground task (only in goal-relevance reasoning).
 const WILD: u32 = u32::MAX;
 
+/// How often the search reads its resident memory (a read of /proc costs microseconds).
+const MEMORY_CHECK_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
 /// Whether `f` is a literal over static facts (or equality).
 fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
     match f {
@@ -228,6 +231,8 @@ pub(crate) struct Search<'a, 'o> {
     loop_check: bool,
     stats: SearchStats,
     start: Instant,
+    /// When the resident memory is read next (every [`MEMORY_CHECK_EVERY`]).
+    next_memory_check: Instant,
     effects: EffectBuf,
     mode: Mode,
     forced: VecDeque<Key>,
@@ -348,6 +353,7 @@ impl<'a, 'o> Search<'a, 'o> {
             loop_check: opts.loop_check,
             stats: SearchStats::default(),
             start: Instant::now(),
+            next_memory_check: Instant::now(),
             effects: EffectBuf::default(),
             mode: Mode::Normal,
             forced: VecDeque::new(),
@@ -360,8 +366,22 @@ impl<'a, 'o> Search<'a, 'o> {
         })
     }
 
+    /// Counts the limits and the statistics' time from `t` (before compiling) instead of from
+    /// when the search was made.
+    pub fn started_at(mut self, t: Instant) -> Self {
+        self.start = t;
+        self
+    }
+
     pub fn run(mut self) -> Result<SearchResult, PlanError> {
-        self.start = Instant::now();
+        let deadline = self
+            .opts
+            .limits
+            .time
+            .and_then(|t| self.start.checked_add(t));
+        if let Some(o) = self.oracle.as_deref_mut() {
+            o.set_deadline(deadline);
+        }
         let outcome = loop {
             self.stats.iterations += 1;
             self.stats.depth_bound = self.bound;
@@ -437,6 +457,10 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
+    /// The limits, checked at every node: the clock is cheap (tens of nanoseconds, far below
+    /// a node's cost), so a limit stops the search within one node of it, however costly nodes
+    /// are (best-first nodes, geometric calls). The resident memory costs a read of /proc, so
+    /// it is read every [`MEMORY_CHECK_EVERY`] of search instead.
     fn check_limits(&mut self) -> Option<Limit> {
         let l = self.opts.limits;
         if let Some(n) = l.nodes
@@ -444,17 +468,18 @@ impl<'a, 'o> Search<'a, 'o> {
         {
             return Some(Limit::Nodes);
         }
-        if self.stats.nodes % 256 == 0
-            && let Some(t) = l.time
-            && self.start.elapsed() >= t
+        let now = Instant::now();
+        if let Some(t) = l.time
+            && now.duration_since(self.start) >= t
         {
             return Some(Limit::Time);
         }
-        if self.stats.nodes % 4096 == 0 {
+        if now >= self.next_memory_check {
+            self.next_memory_check = now + MEMORY_CHECK_EVERY;
             let rss = current_rss_kb();
             self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(rss);
             if let Some(mb) = l.memory_mb
-                && rss > mb * 1024
+                && rss > mb.saturating_mul(1024)
             {
                 return Some(Limit::Memory);
             }
@@ -471,8 +496,7 @@ impl<'a, 'o> Search<'a, 'o> {
             if let Some(l) = self.check_limits() {
                 return Ok(Stop::Limit(l));
             }
-            if self.stats.nodes % 256 == 0
-                && let Some(t) = self.switch_at
+            if let Some(t) = self.switch_at
                 && self.start.elapsed() >= t
             {
                 return Ok(Stop::Switch);
