@@ -41,15 +41,25 @@ fn tiny_problem(dir: &Path) -> (PathBuf, PathBuf) {
 
 /// The library scene with the member moved to `x` (URDF paths made absolute).
 fn library_scene_with_member_at(dir: &Path, x: &str) -> PathBuf {
+    library_scene_edited(
+        dir,
+        "base = { x = 0.68, y = 0.0, yaw = 180 }",
+        &format!("base = {{ x = {x}, y = 0.0, yaw = 180 }}"),
+    )
+}
+
+/// The library scene with `from` replaced by `to` (URDF paths made absolute).
+fn library_scene_edited(dir: &Path, from: &str, to: &str) -> PathBuf {
     let models = root().join("models").canonicalize().unwrap();
-    let text = std::fs::read_to_string(root().join("domains/library/scene.toml"))
-        .unwrap()
+    let text = std::fs::read_to_string(root().join("domains/library/scene.toml")).unwrap();
+    assert!(
+        text.contains(from),
+        "the library scene changed: no `{from}`"
+    );
+    let text = text
         .replace("../../models", &models.display().to_string())
-        .replace(
-            "base = { x = 0.68, y = 0.0, yaw = 180 }",
-            &format!("base = {{ x = {x}, y = 0.0, yaw = 180 }}"),
-        );
-    let path = dir.join("far.toml");
+        .replace(from, to);
+    let path = dir.join("edited.toml");
     std::fs::write(&path, text).unwrap();
     path
 }
@@ -351,4 +361,25 @@ fn the_memory_limit_stops_an_endless_search_near_the_limit() {
     assert_eq!(v["limit"], "memory");
     let peak_mib = v["peak_memory_kb"].as_u64().unwrap() / 1024;
     assert!(peak_mib <= 120 + 50, "peak {peak_mib} MiB");
+}
+
+/// A robot standing inside the desk is refused at load, naming both, not planned in.
+#[test]
+fn a_scene_that_starts_in_collision_is_refused_by_name() {
+    let dir = scratch("in-collision");
+    let scene = library_scene_edited(
+        &dir,
+        "base = { x = -0.72, y = 0.0, yaw = 0 }",
+        "base = { x = 0.0, y = 0.0, yaw = 0 }",
+    );
+    let lib = root().join("domains/library");
+    let (d, p) = (lib.join("domain-compound.hddl"), lib.join("fig4.hddl"));
+    let o = run(
+        &["plan", s(&d), s(&p), "--scene", s(&scene)],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("agents[0]: `pr2` (its link"), "{e}");
+    assert!(e.contains("starts inside `desk`"), "{e}");
 }
