@@ -122,6 +122,19 @@ fn penetration(a: &Body<'_>, b: &Body<'_>) -> Option<f32> {
     (-c.dist > CONTACT_TOLERANCE_M).then_some(-c.dist)
 }
 
+/// Per link: whether it is rigidly fixed to the root (the robot's base; the links are in
+/// topological order, parents first).
+fn base_links(model: &AgentModel) -> Vec<bool> {
+    let mut base = vec![false; model.links().len()];
+    for (i, link) in model.links().iter().enumerate() {
+        base[i] = match (link.parent, link.parent_joint) {
+            (Some(p), Some(j)) => base[p] && !model.joints()[j].is_movable(),
+            _ => true,
+        };
+    }
+    base
+}
+
 /// The world state. Cheap to clone (see the module docs).
 #[derive(Clone, Debug)]
 pub struct World {
@@ -289,23 +302,33 @@ impl World {
         }
     }
 
-    /// The first overlap deeper than [`CONTACT_TOLERANCE_M`] between two objects, or between a
-    /// robot's link and an object, as an error naming both: a scene that starts in collision
-    /// would only make every plan fail ("no plan exists") without saying why. People are not
-    /// checked (a seated person's model rests in the chair).
+    /// The first overlap deeper than [`CONTACT_TOLERANCE_M`] between a movable object and
+    /// another object, or between a robot's base (its links rigidly fixed to the root; an arm
+    /// may start against a wall) and an object, as an error naming both: a
+    /// scene that starts in collision would only make every plan fail ("no plan exists")
+    /// without saying why. Furniture may overlap furniture (walls joined at a corner), and
+    /// people are not checked (a seated person's model rests in the chair).
     fn initial_overlap(&self) -> Option<SceneError> {
         let bodies = self.bodies();
         let objects: Vec<&Body<'_>> = bodies
             .iter()
             .filter(|b| matches!(b.owner, BodyOwner::Object(_)))
             .collect();
+        let bases: Vec<Vec<bool>> = self
+            .agent_ids()
+            .map(|a| base_links(&self.agent(a).model))
+            .collect();
         let robot_links = bodies.iter().filter(|b| {
-            matches!(b.owner, BodyOwner::Agent(a, _) if self.agent(a).kind() == AgentKind::Robot)
+            matches!(b.owner, BodyOwner::Agent(a, l)
+                if self.agent(a).kind() == AgentKind::Robot && bases[a.0][l])
         });
+        let movable =
+            |b: &Body<'_>| matches!(b.owner, BodyOwner::Object(id) if self.object(id).movable);
         let object_pairs = objects
             .iter()
             .enumerate()
-            .flat_map(|(i, a)| objects[i + 1..].iter().map(move |b| (*b, *a)));
+            .flat_map(|(i, a)| objects[i + 1..].iter().map(move |b| (*b, *a)))
+            .filter(|(a, b)| movable(a) || movable(b));
         let link_pairs = robot_links.flat_map(|l| objects.iter().map(move |o| (l, *o)));
         object_pairs
             .chain(link_pairs)
