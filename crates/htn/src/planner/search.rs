@@ -29,6 +29,30 @@ const WILD: u32 = u32::MAX;
 /// How often the search reads its resident memory (a read of /proc costs microseconds).
 const MEMORY_CHECK_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
 
+/// The bytes a vector allocates when its next push doubles it (0 while it has room).
+pub(super) fn vec_growth<T>(len: usize, capacity: usize) -> usize {
+    if len < capacity {
+        0
+    } else {
+        capacity.max(4) * 2 * std::mem::size_of::<T>()
+    }
+}
+
+/// The bytes a hash set allocates when its next insert doubles it (0 while it has room):
+/// twice its buckets, each an entry and a control byte.
+pub(super) fn set_growth<T, S>(set: &HashSet<T, S>) -> usize {
+    table_growth::<T>(set.len(), set.capacity())
+}
+
+/// [`set_growth`] of a hash table of `len` entries of type `T` with room for `capacity`.
+pub(super) fn table_growth<T>(len: usize, capacity: usize) -> usize {
+    if len < capacity {
+        0
+    } else {
+        (capacity.max(4) * 2).next_power_of_two() * (std::mem::size_of::<T>() + 1)
+    }
+}
+
 /// Whether `f` is a literal over static facts (or equality).
 fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
     match f {
@@ -233,6 +257,8 @@ pub(crate) struct Search<'a, 'o> {
     start: Instant,
     /// When the resident memory is read next (every [`MEMORY_CHECK_EVERY`]).
     next_memory_check: Instant,
+    /// A table's doubling would have passed the memory limit ([`Search::growth_fits`]).
+    memory_reached: bool,
     effects: EffectBuf,
     mode: Mode,
     forced: VecDeque<Key>,
@@ -354,6 +380,7 @@ impl<'a, 'o> Search<'a, 'o> {
             stats: SearchStats::default(),
             start: Instant::now(),
             next_memory_check: Instant::now(),
+            memory_reached: false,
             effects: EffectBuf::default(),
             mode: Mode::Normal,
             forced: VecDeque::new(),
@@ -468,6 +495,9 @@ impl<'a, 'o> Search<'a, 'o> {
         {
             return Some(Limit::Nodes);
         }
+        if self.memory_reached {
+            return Some(Limit::Memory);
+        }
         let now = Instant::now();
         if let Some(t) = l.time
             && now.duration_since(self.start) >= t
@@ -485,6 +515,23 @@ impl<'a, 'o> Search<'a, 'o> {
             }
         }
         None
+    }
+
+    /// Whether the search may grow a table by `extra` bytes (while it doubles, the old and the
+    /// new table are both resident) within the memory limit; if not, the memory limit is
+    /// marked reached, for [`Search::check_limits`]. `extra` 0 (nothing doubles) costs nothing.
+    pub(super) fn growth_fits(&mut self, extra: usize) -> bool {
+        let Some(mb) = self.opts.limits.memory_mb else {
+            return true;
+        };
+        if extra == 0 {
+            return true;
+        }
+        let fits = current_rss_kb() + (extra as u64 >> 10) <= mb.saturating_mul(1024);
+        if !fits {
+            self.memory_reached = true;
+        }
+        fits
     }
 
     fn dfs(&mut self) -> Result<Stop, PlanError> {
@@ -795,6 +842,11 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
+        if !self.growth_fits(set_growth(&self.visited)) {
+            // The table would double past the memory limit: stop (at the next check) rather
+            // than grow. Taking the node as new loses nothing, the search ends there.
+            return true;
+        }
         let h = self.state_fingerprint();
         self.visited.insert(((h as u128) << 64) | net_hash as u128)
     }
