@@ -1,7 +1,10 @@
 //! `htngtp`: the command-line front end. Each subcommand lives in its own module under `cmd/`;
 //! this file only parses arguments and maps outcomes to exit codes.
 
+#[macro_use]
+mod out;
 mod cmd;
+mod input;
 
 use std::process::ExitCode;
 
@@ -27,7 +30,11 @@ pub mod exit {
     about = "A combined HTN and geometric task planner for robots that work among people",
     after_help = "Exit codes: 0 plan found / success; 1 proven unsolvable (a complete search, \
                   no cap) or plan invalid; 2 stopped incomplete: a time, node or memory limit, \
-                  or the strategy's cap on geometric alternatives; 3 bad input."
+                  or the strategy's cap on geometric alternatives; 3 bad input (also a failed \
+                  write of the output; a closed output pipe ends quietly with 141).\n\nInputs: \
+                  every input file must be a regular file of at most 256 MiB (the environment \
+                  variable HTNGTP_MAX_INPUT_MIB sets another cap); devices and directories are \
+                  refused."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -83,6 +90,7 @@ fn main() -> ExitCode {
         Command::View(args) => cmd::view::run(args),
         Command::Check(args) => cmd::check::run(args),
     };
+    out::flush();
     match result {
         Ok(code) => ExitCode::from(code),
         Err(e) => {

@@ -208,7 +208,12 @@ impl Rendered {
         let img =
             image::RgbImage::from_raw(self.width as u32, self.height as u32, self.rgb.clone())
                 .ok_or_else(|| "image buffer has the wrong size".to_string())?;
-        img.save(path)
+        // Encoded in memory, then written whole: a buffered file writer would drop the error
+        // of its last flush (a full disk) and report success.
+        let mut png = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut png, image::ImageFormat::Png)
+            .map_err(|e| format!("{}: cannot encode PNG: {e}", path.display()))?;
+        std::fs::write(path, png.into_inner())
             .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))
     }
 }

@@ -18,6 +18,16 @@ use serde::Deserialize;
 
 use crate::mesh_file;
 
+/// The world's extent: every coordinate and size in a scene file lies within this many metres
+/// of the origin. Rooms are metres across; a value beyond this is a typing error (`1e30`), and
+/// accepting it would make every grid over the scene (the GTP's candidate points, the
+/// mightability maps) astronomically large.
+pub const WORLD_EXTENT_M: f32 = 1000.0;
+
+/// The largest scene file read (64 MiB; the library scenes are a few KiB). Reading stops there,
+/// so a device (`/dev/zero`) or a runaway file cannot fill memory.
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+
 /// An error in a scene file: `FILE[:LINE:COL]: key.path: reason`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SceneError {
@@ -346,11 +356,11 @@ impl Scene {
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        let text = read_capped(path, MAX_SCENE_BYTES).map_err(|reason| SceneError {
             file: source.clone(),
             line_col: None,
             key_path: String::new(),
-            reason: format!("cannot read the scene file: {e}"),
+            reason,
         })?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let stem = path
@@ -415,11 +425,12 @@ impl Scene {
                 }
             };
             let local_aabb = shape.compute_aabb(&shape_offset);
+            ck.extent(&local_aabb, &at)?;
             let mut surfaces = Vec::new();
             if let Some(list) = &spec.surfaces {
                 for (k, s) in list.iter().enumerate() {
                     let sat = format!("{at}.surfaces[{k}]");
-                    ck.finite(&s.centre, &format!("{sat}.centre"))?;
+                    ck.coords(&s.centre, &format!("{sat}.centre"))?;
                     ck.positive(&s.half_extents, &format!("{sat}.half_extents"))?;
                     surfaces.push(SupportSurface {
                         centre: Vector::from(s.centre),
@@ -470,7 +481,8 @@ impl Scene {
                     format!("URDF file `{}` not found", urdf.display()),
                 ));
             }
-            ck.finite(&[a.base.x, a.base.y, a.base.yaw], &format!("{at}.base"))?;
+            ck.finite(&[a.base.yaw], &format!("{at}.base.yaw"))?;
+            ck.coords(&[a.base.x, a.base.y], &format!("{at}.base"))?;
             for (j, v) in &a.joints {
                 if !v.is_finite() {
                     return Err(ck.err(
@@ -528,8 +540,8 @@ impl Scene {
 
         let bounds = match &file.scene.bounds {
             Some(b) => {
-                ck.finite(&b.min, "scene.bounds.min")?;
-                ck.finite(&b.max, "scene.bounds.max")?;
+                ck.coords(&b.min, "scene.bounds.min")?;
+                ck.coords(&b.max, "scene.bounds.max")?;
                 if (0..3).any(|k| b.min[k] >= b.max[k]) {
                     return Err(ck.err(
                         "scene.bounds",
@@ -641,6 +653,32 @@ impl Checker {
         }
     }
 
+    /// Finite and within [`WORLD_EXTENT_M`] of the origin.
+    fn coords(&self, v: &[f32], at: &str) -> Result<(), SceneError> {
+        self.finite(v, at)?;
+        if v.iter().all(|x| x.abs() <= WORLD_EXTENT_M) {
+            Ok(())
+        } else {
+            Err(self.err(
+                at,
+                format!("values {v:?} lie outside the world (|value| <= {WORLD_EXTENT_M} m)"),
+            ))
+        }
+    }
+
+    /// A shape's bounding box in its object's frame lies within the world's extent.
+    fn extent(&self, aabb: &Aabb, at: &str) -> Result<(), SceneError> {
+        let far = aabb.mins.abs().max(aabb.maxs.abs()).max_element();
+        if far <= WORLD_EXTENT_M {
+            Ok(())
+        } else {
+            Err(self.err(
+                at,
+                format!("the shape reaches {far} m from its frame (at most {WORLD_EXTENT_M} m)"),
+            ))
+        }
+    }
+
     fn positive(&self, v: &[f32], at: &str) -> Result<(), SceneError> {
         self.finite(v, at)?;
         if v.iter().all(|x| *x > 0.0) {
@@ -651,7 +689,7 @@ impl Checker {
     }
 
     fn pose(&self, p: &PoseSpec, at: &str) -> Result<Pose, SceneError> {
-        self.finite(&p.xyz, &format!("{at}.xyz"))?;
+        self.coords(&p.xyz, &format!("{at}.xyz"))?;
         let rpy = match (p.rpy, p.yaw) {
             (Some(_), Some(_)) => {
                 return Err(self.err(at, "give either `rpy` or `yaw`, not both".into()));
@@ -752,6 +790,37 @@ impl Checker {
         }
         Ok(())
     }
+}
+
+/// Reads a text file of at most `cap` bytes; directories, larger files and endless devices are
+/// refused with a reason (reading stops at the cap, whatever the file claims its size is).
+pub fn read_capped(path: &Path, cap: u64) -> Result<String, String> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read the scene file: {e}"))?;
+    let meta = file
+        .metadata()
+        .map_err(|e| format!("cannot read the scene file: {e}"))?;
+    if meta.is_dir() {
+        return Err("is a directory, not a file".into());
+    }
+    if meta.len() > cap {
+        return Err(format!(
+            "the file is {} bytes, more than the {} MiB allowed",
+            meta.len(),
+            cap >> 20
+        ));
+    }
+    let mut bytes = Vec::new();
+    file.take(cap + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read the scene file: {e}"))?;
+    if bytes.len() as u64 > cap {
+        return Err(format!(
+            "more than the {} MiB allowed (is it a device or an endless stream?)",
+            cap >> 20
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text: {e}"))
 }
 
 /// Turns a TOML/serde error into a [`SceneError`] with line:column and the key path at its span.

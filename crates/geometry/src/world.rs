@@ -107,6 +107,34 @@ pub struct Body<'a> {
     pub colour: [u8; 3],
 }
 
+/// How deep two bodies may interpenetrate in a scene as loaded: a book resting on a desk
+/// touches it (within rounding), which is not a collision.
+pub const CONTACT_TOLERANCE_M: f32 = 0.001;
+
+/// How deep two bodies interpenetrate, when more than [`CONTACT_TOLERANCE_M`] (bounding boxes
+/// first; shapes parry cannot compare are taken as apart).
+fn penetration(a: &Body<'_>, b: &Body<'_>) -> Option<f32> {
+    let (ba, bb) = (a.shape.compute_aabb(&a.pose), b.shape.compute_aabb(&b.pose));
+    if !ba.intersects(&bb) {
+        return None;
+    }
+    let c = parry3d::query::contact(&a.pose, &**a.shape, &b.pose, &**b.shape, 0.0).ok()??;
+    (-c.dist > CONTACT_TOLERANCE_M).then_some(-c.dist)
+}
+
+/// Per link: whether it is rigidly fixed to the root (the robot's base; the links are in
+/// topological order, parents first).
+fn base_links(model: &AgentModel) -> Vec<bool> {
+    let mut base = vec![false; model.links().len()];
+    for (i, link) in model.links().iter().enumerate() {
+        base[i] = match (link.parent, link.parent_joint) {
+            (Some(p), Some(j)) => base[p] && !model.joints()[j].is_movable(),
+            _ => true,
+        };
+    }
+    base
+}
+
 /// The world state. Cheap to clone (see the module docs).
 #[derive(Clone, Debug)]
 pub struct World {
@@ -259,7 +287,7 @@ impl World {
         }
         let poses = scene.initial_poses.clone();
         let n = poses.len();
-        Ok(World {
+        let world = World {
             model: Arc::new(WorldModel {
                 scene,
                 agents: infos,
@@ -267,7 +295,72 @@ impl World {
             poses,
             attachments: vec![None; n],
             agents: states,
-        })
+        };
+        match world.initial_overlap() {
+            Some(e) => Err(e),
+            None => Ok(world),
+        }
+    }
+
+    /// The first overlap deeper than [`CONTACT_TOLERANCE_M`] between a movable object and
+    /// another object, or between a robot's base (its links rigidly fixed to the root; an arm
+    /// may start against a wall) and an object, as an error naming both: a
+    /// scene that starts in collision would only make every plan fail ("no plan exists")
+    /// without saying why. Furniture may overlap furniture (walls joined at a corner), and
+    /// people are not checked (a seated person's model rests in the chair).
+    fn initial_overlap(&self) -> Option<SceneError> {
+        let bodies = self.bodies();
+        let objects: Vec<&Body<'_>> = bodies
+            .iter()
+            .filter(|b| matches!(b.owner, BodyOwner::Object(_)))
+            .collect();
+        let bases: Vec<Vec<bool>> = self
+            .agent_ids()
+            .map(|a| base_links(&self.agent(a).model))
+            .collect();
+        let robot_links = bodies.iter().filter(|b| {
+            matches!(b.owner, BodyOwner::Agent(a, l)
+                if self.agent(a).kind() == AgentKind::Robot && bases[a.0][l])
+        });
+        let movable =
+            |b: &Body<'_>| matches!(b.owner, BodyOwner::Object(id) if self.object(id).movable);
+        let object_pairs = objects
+            .iter()
+            .enumerate()
+            .flat_map(|(i, a)| objects[i + 1..].iter().map(move |b| (*b, *a)))
+            .filter(|(a, b)| movable(a) || movable(b));
+        let link_pairs = robot_links.flat_map(|l| objects.iter().map(move |o| (l, *o)));
+        object_pairs
+            .chain(link_pairs)
+            .find_map(|(a, b)| Some((a, b, penetration(a, b)?)))
+            .map(|(a, b, depth)| self.overlap_error(a, b, depth))
+    }
+
+    /// The error for body `a` overlapping object `b` by `depth` metres, at `a`'s key path.
+    fn overlap_error(&self, a: &Body<'_>, b: &Body<'_>, depth: f32) -> SceneError {
+        let name = |o: BodyOwner| match o {
+            BodyOwner::Object(id) => format!("`{}`", self.object(id).name),
+            BodyOwner::Agent(ag, l) => format!(
+                "`{}` (its link `{}`)",
+                self.agent(ag).name(),
+                self.agent(ag).model.links()[l].name
+            ),
+        };
+        let at = match a.owner {
+            BodyOwner::Object(id) => format!("objects[{}]", id.0),
+            BodyOwner::Agent(ag, _) => format!("agents[{}]", ag.0),
+        };
+        self.scene().error(
+            &at,
+            format!(
+                "{} starts inside {} ({:.1} mm deep; a scene must start free of collisions, \
+                 touching within {} mm is allowed)",
+                name(a.owner),
+                name(b.owner),
+                depth * 1000.0,
+                CONTACT_TOLERANCE_M * 1000.0
+            ),
+        )
     }
 
     /// The scene this world was made from.

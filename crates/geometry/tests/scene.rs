@@ -164,3 +164,30 @@ fn worlds_clone_cheaply_and_mutate_independently() {
     w2.detach(book);
     assert!(w2.obstacles().any(|(id, ..)| id == book));
 }
+
+/// Things resting on each other touch, and half a millimetre of overlap (rounding in a
+/// hand-written scene) is not a collision: such scenes load.
+#[test]
+fn touching_objects_load() {
+    let text = r#"
+[[objects]]
+name = "desk"
+shape = { box = [0.5, 0.5, 0.375] }
+pose = { xyz = [0, 0, 0.375] }
+support = true
+
+[[objects]]
+name = "book"
+shape = { box = [0.1, 0.14, 0.02] }
+pose = { xyz = [0, 0, 0.77] }
+movable = true
+
+[[objects]]
+name = "other-book"
+shape = { box = [0.1, 0.14, 0.02] }
+pose = { xyz = [0, 0, 0.8095] }
+movable = true
+"#;
+    let scene = geometry::scene::Scene::from_str(text, "t.toml", Path::new("."), "t").unwrap();
+    assert!(World::from_scene(scene).is_ok());
+}

@@ -20,7 +20,7 @@
 
 use std::fmt;
 use std::sync::{Arc, Mutex, Weak};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use geometry::scene::{AgentId, AgentKind, ObjectId};
 use geometry::world::{World, WorldModel};
@@ -225,6 +225,9 @@ pub struct CallOptions {
     pub seed: u64,
     /// Threshold overrides, `(name, value)` as [`Constraints::set`] takes them.
     pub constraints: Vec<(String, String)>,
+    /// The caller's deadline (an HTN search's time limit): the call's time limit and every
+    /// motion-planning query end there at the latest. `None`: only the call's own limit.
+    pub deadline: Option<Instant>,
 }
 
 impl Default for CallOptions {
@@ -232,6 +235,7 @@ impl Default for CallOptions {
         CallOptions {
             seed: 1,
             constraints: Vec::new(),
+            deadline: None,
         }
     }
 }
@@ -379,13 +383,19 @@ impl Planner {
         for (k, v) in &options.constraints {
             constraints.set(k, v).map_err(GtpError::Constraint)?;
         }
+        let mut config = self.config.clone();
+        if let Some(d) = options.deadline {
+            let left = d.saturating_duration_since(Instant::now());
+            constraints.time_limit = constraints.time_limit.min(left);
+            config.rrt.deadline = Some(d);
+        }
         let setup = self.robot(world)?;
         let person = match (task.kind, task.human) {
             (TaskKind::Take, Some(h)) => Some(self.agent_setup(world, h)?),
             _ => None,
         };
         let mut search = Search::new(
-            self.config.clone(),
+            config,
             setup,
             world.clone(),
             task.clone(),

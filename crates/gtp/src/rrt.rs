@@ -139,6 +139,9 @@ pub struct RrtParams {
     pub max_nodes: usize,
     /// The query fails after this long.
     pub time_limit: Duration,
+    /// The query fails at this instant too (the caller's deadline; not serialised).
+    #[serde(skip)]
+    pub deadline: Option<Instant>,
     /// Shortcut attempts on the path found.
     pub shortcut_iterations: usize,
     /// The final path is checked at `resolution / certify_factor`, on the configurations that
@@ -154,6 +157,7 @@ impl Default for RrtParams {
             max_step: 1.0,
             max_nodes: 5000,
             time_limit: Duration::from_millis(500),
+            deadline: None,
             shortcut_iterations: 10,
             certify_factor: 4,
         }
@@ -546,7 +550,9 @@ fn plan_once(
         if a.len() + b.len() >= params.max_nodes {
             return Err((RrtError::NodeLimit(params.max_nodes), stats));
         }
-        if began.elapsed() > params.time_limit {
+        if began.elapsed() > params.time_limit
+            || params.deadline.is_some_and(|d| Instant::now() >= d)
+        {
             return Err((RrtError::TimeLimit(params.time_limit), stats));
         }
         space.sample(rng, &mut sample);

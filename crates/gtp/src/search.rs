@@ -700,15 +700,7 @@ impl Search {
             lo -= Vector::new(0.3, 0.3, 0.6);
             hi += Vector::new(0.3, 0.3, 0.2);
             lo.z = lo.z.max(0.5);
-            let step = 0.05;
-            let n = ((hi - lo) / step).ceil();
-            for i in 0..=n.x as i32 {
-                for j in 0..=n.y as i32 {
-                    for k in 0..=n.z as i32 {
-                        raw.push(lo + Vector::new(i as f32, j as f32, k as f32) * step);
-                    }
-                }
-            }
+            raw.extend(bounded_grid(lo, hi, &rshoulders, rreach));
         } else {
             let supports: Vec<ObjectId> = match (kind, self.task.support) {
                 (TaskKind::PlaceOn, Some(s)) => vec![s],
@@ -723,12 +715,12 @@ impl Search {
             for s in supports {
                 let pose = self.world.object_pose(s);
                 for surf in &self.world.object(s).surfaces {
-                    let step = 0.05;
                     let inset = 0.03;
                     let (hx, hy) = (surf.half_extents[0] - inset, surf.half_extents[1] - inset);
                     if hx < 0.0 || hy < 0.0 {
                         continue;
                     }
+                    let step = grid_step(Vector::new(2.0 * hx, 2.0 * hy, 0.0));
                     let nx = (2.0 * hx / step).floor() as i32;
                     let ny = (2.0 * hy / step).floor() as i32;
                     let ox = -(nx as f32) * step / 2.0;
@@ -2642,6 +2634,47 @@ fn free_region(
     FreeRegion { origin, cells }
 }
 
+/// The most points one candidate grid holds (a surface, or the air between two agents).
+const MAX_GRID_POINTS: f32 = 100_000.0;
+
+/// The spacing of a candidate grid over a box of size `size` (a zero side is a flat grid): 5 cm,
+/// or coarser where that would make more than [`MAX_GRID_POINTS`] points.
+fn grid_step(size: Vector) -> f32 {
+    let points = |s: f32| ((size / s).ceil() + Vector::ONE).element_product();
+    let mut step = 0.05_f32;
+    while points(step) > MAX_GRID_POINTS {
+        step *= 1.25;
+    }
+    step
+}
+
+/// The hand-over grid over the box `lo..hi`: its points within the box clipped to what the
+/// robot's shoulders reach (a point beyond is rejected anyway), spaced by [`grid_step`], so far-
+/// apart agents or a huge reach cannot make it exhaust memory. The lattice starts at `lo`, so
+/// where nothing is clipped the points are those of the plain 5 cm grid.
+fn bounded_grid(lo: Vector, hi: Vector, shoulders: &[Vector], reach: f32) -> Vec<Vector> {
+    let far = Vector::splat(f32::MAX);
+    let (smin, smax) = shoulders
+        .iter()
+        .fold((far, -far), |(a, b), s| (a.min(*s), b.max(*s)));
+    let (clo, chi) = (lo.max(smin - reach), hi.min(smax + reach));
+    if shoulders.is_empty() || (chi - clo).min_element() < 0.0 {
+        return Vec::new();
+    }
+    let step = grid_step(chi - clo);
+    let first = ((clo - lo) / step).floor();
+    let last = ((chi - lo) / step).ceil().min(((hi - lo) / step).ceil());
+    let mut out = Vec::new();
+    for i in first.x as i32..=last.x as i32 {
+        for j in first.y as i32..=last.y as i32 {
+            for k in first.z as i32..=last.z as i32 {
+                out.push(lo + Vector::new(i as f32, j as f32, k as f32) * step);
+            }
+        }
+    }
+    out
+}
+
 fn key(p: Vector) -> (i32, i32, i32) {
     (
         (p.x * 100.0).round() as i32,
@@ -2655,4 +2688,37 @@ fn touching(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
     parry3d::query::distance(pa, a, pb, b)
         .map(|d| d.distance <= 0.002)
         .unwrap_or(true)
+}
+
+#[cfg(test)]
+mod grid_tests {
+    use super::*;
+
+    /// A person two kilometres away makes a bounded grid, within the robot's reach.
+    #[test]
+    fn far_person_grid_is_clipped_to_reach() {
+        let shoulders = [Vector::new(0.0, -0.2, 1.2), Vector::new(0.0, 0.2, 1.2)];
+        let (lo, hi) = (Vector::new(-0.3, -0.5, 0.5), Vector::new(2000.0, 0.5, 1.8));
+        let pts = bounded_grid(lo, hi, &shoulders, 0.95);
+        assert!(!pts.is_empty() && pts.len() as f32 <= MAX_GRID_POINTS);
+        assert!(pts.iter().all(|p| p.x <= 0.95 + 0.05));
+    }
+
+    /// A huge reach coarsens the grid instead of growing it.
+    #[test]
+    fn huge_reach_grid_is_capped() {
+        let shoulders = [Vector::ZERO];
+        let pts = bounded_grid(Vector::splat(-900.0), Vector::splat(900.0), &shoulders, 1e3);
+        assert!(pts.len() as f32 <= MAX_GRID_POINTS, "{} points", pts.len());
+    }
+
+    /// Where nothing is clipped, the grid is the plain 5 cm grid from `lo`.
+    #[test]
+    fn unclipped_grid_is_the_plain_grid() {
+        let shoulders = [Vector::new(0.5, 0.0, 1.0)];
+        let (lo, hi) = (Vector::new(0.0, 0.0, 0.5), Vector::new(1.0, 0.5, 1.5));
+        let pts = bounded_grid(lo, hi, &shoulders, 2.0);
+        assert_eq!(pts.len(), 21 * 11 * 21);
+        assert_eq!(pts[1], lo + Vector::new(0.0, 0.0, 0.05));
+    }
 }

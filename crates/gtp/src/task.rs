@@ -236,8 +236,11 @@ impl Constraints {
             "approach" => self.approach = float()?.max(0.0),
             "time-limit" => {
                 let s = float()?;
-                if s <= 0.0 {
-                    return Err(format!("time-limit: expected seconds > 0, found `{value}`"));
+                // At most a year: a `Duration` cannot hold 1e20 s.
+                if !(s > 0.0 && s <= 3.2e7) {
+                    return Err(format!(
+                        "time-limit: expected seconds > 0 and at most a year, found `{value}`"
+                    ));
                 }
                 self.time_limit = Duration::from_secs_f32(s);
             }
@@ -293,6 +296,11 @@ mod tests {
         c.set("min-visibility", "0.9").unwrap();
         assert_eq!(c.min_visibility, Some(0.9));
         c.set("time_limit", "2.5").unwrap();
+        assert!(
+            c.set("time-limit", "1e20")
+                .unwrap_err()
+                .contains("at most a year")
+        );
         assert_eq!(c.time_limit, Duration::from_millis(2500));
         assert!(
             c.set("min-visibility", "1.5")

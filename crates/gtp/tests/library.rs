@@ -343,6 +343,24 @@ fn the_time_limit_stops_a_call_and_says_so() {
     assert!(!stream.stats().success);
 }
 
+/// A caller's deadline that has passed stops a call as its own time limit would.
+#[test]
+fn a_passed_deadline_stops_a_call_and_says_so() {
+    let world = library();
+    let planner = Planner::new();
+    let options = CallOptions {
+        deadline: Some(std::time::Instant::now()),
+        ..CallOptions::seeded(1)
+    };
+    let mut stream = planner
+        .run(&world, "give", &["grey-book", "member"], &options)
+        .unwrap();
+    assert!(stream.next().is_none());
+    let f = stream.failure().unwrap();
+    assert!(f.limit, "{f}");
+    assert_eq!(f.constraint, "time-limit");
+}
+
 #[test]
 fn tasks_chain_from_the_world_a_solution_leaves() {
     // Show the book (held in the air), then make it accessible from there: the grasp is kept.

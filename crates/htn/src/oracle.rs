@@ -88,6 +88,10 @@ pub trait GeometricOracle {
     /// if the world is fully described by the shared literals.
     fn world_fingerprint(&self) -> u64;
 
+    /// The instant the search must end by (its time limit), so that a geometric call stops
+    /// there too rather than run past it; called when a search starts. The default ignores it.
+    fn set_deadline(&mut self, _deadline: Option<std::time::Instant>) {}
+
     /// Statistics of the back end (per geometric task: calls, successes, time...), for reports.
     fn stats(&self) -> serde_json::Value {
         serde_json::Value::Null

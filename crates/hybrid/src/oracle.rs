@@ -107,6 +107,8 @@ pub struct GtpOracle {
     stats: HashMap<String, TaskStats>,
     /// The last request that found no solution: task, arguments, why.
     last_failure: Option<(String, Vec<String>, String)>,
+    /// The HTN search's deadline, passed to every GTP call.
+    deadline: Option<std::time::Instant>,
 }
 
 impl GtpOracle {
@@ -132,6 +134,7 @@ impl GtpOracle {
             next_stream: 0,
             stats: HashMap::new(),
             last_failure: None,
+            deadline: None,
         };
         let frame = oracle.frame(world);
         oracle.stack.push(frame);
@@ -208,6 +211,7 @@ impl GtpOracle {
         CallOptions {
             seed: self.config.seed ^ h.finish(),
             constraints: self.config.constraints.clone(),
+            deadline: self.deadline,
         }
     }
 
@@ -358,6 +362,10 @@ impl GeometricOracle for GtpOracle {
         if self.stack.len() > 1 {
             self.stack.pop();
         }
+    }
+
+    fn set_deadline(&mut self, deadline: Option<std::time::Instant>) {
+        self.deadline = deadline;
     }
 
     fn world_fingerprint(&self) -> u64 {

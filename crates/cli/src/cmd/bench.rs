@@ -66,7 +66,7 @@ pub struct LibraryArgs {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Time limit of each run, seconds.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::input::seconds)]
     pub time_limit: f64,
     /// Folder for the CSV and JSON results.
     #[arg(long, default_value = "htngtp-bench")]
@@ -160,7 +160,7 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
                 planner: PlannerOptions {
                     strategy: s,
                     limits: htn::planner::Limits {
-                        time: Some(std::time::Duration::from_secs_f64(args.time_limit)),
+                        time: Some(crate::input::duration(args.time_limit)),
                         ..Default::default()
                     },
                     ..PlannerOptions::default()

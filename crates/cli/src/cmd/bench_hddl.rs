@@ -2,7 +2,7 @@
 //! like the IPC 2020 total-order track, one problem per child process, and report coverage.
 
 use std::collections::BTreeMap;
-use std::io::Read;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
@@ -32,7 +32,7 @@ pub struct Args {
     /// The benchmark directory (one folder per domain).
     pub dir: PathBuf,
     /// Seconds per problem.
-    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    #[arg(long, default_value_t = 10.0, value_name = "S", value_parser = crate::input::seconds)]
     pub time_limit: f64,
     /// Memory limit per problem, MiB.
     #[arg(long, default_value_t = 2048, value_name = "MB")]
@@ -139,6 +139,8 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
         .arg(args.memory_limit.to_string())
         .arg("--seed")
         .arg(args.seed.to_string())
+        .arg("--exit-with-stdin")
+        .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn();
@@ -164,7 +166,7 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
         s
     });
     // The child stops itself at the limit; a hard stop a little later catches a hang.
-    let hard = Duration::from_secs_f64(args.time_limit + 10.0);
+    let hard = crate::input::duration(args.time_limit + 10.0);
     let status = loop {
         match child.try_wait() {
             Ok(Some(s)) => break Some(s),
@@ -177,6 +179,8 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
             Err(_) => break None,
         }
     };
+    // The child's stdin: open while this process lives; its end stops the child.
+    drop(child.stdin.take());
     let wall = start.elapsed().as_secs_f64();
     let stdout = out_t.join().unwrap_or_default();
     let stderr = err_t.join().unwrap_or_default();
@@ -255,6 +259,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} [{elapsed_precise}] {msg}")
             .expect("a valid template"),
     );
+    let csv = args.csv.as_deref().map(CsvFile::create).transpose()?;
+    let csv = Mutex::new(csv);
     let rows: Mutex<Vec<Option<Row>>> = Mutex::new(vec![None; jobs.len()]);
     let next = AtomicUsize::new(0);
     std::thread::scope(|s| {
@@ -277,6 +283,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                             "{} {}: {} {}",
                             row.domain_name, row.problem, row.status, row.message
                         ));
+                    }
+                    if let Some(f) = csv.lock().expect("csv").as_mut() {
+                        f.append(&row);
                     }
                     rows.lock().expect("rows")[i] = Some(row);
                     bar.inc(1);
@@ -333,29 +342,93 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         rows.iter().filter(|r| r.status == "limit-reached").count(),
         invalid_all
     );
-    if let Some(path) = &args.csv {
-        let mut s = String::from(
-            "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,message\n",
-        );
-        for r in &rows {
-            s.push_str(&format!(
-                "{},{},{},{:.3},{},{},{},{},\"{}\"\n",
-                r.domain_name,
-                r.problem,
-                r.status,
-                r.time_s,
-                r.nodes,
-                r.peak_kb,
-                r.plan_len,
-                r.validated,
-                r.message.replace('"', "'")
-            ));
-        }
-        std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;
+    if let Some(f) = csv.into_inner().expect("csv") {
+        f.finish()?;
     }
     Ok(if invalid_all > 0 {
         exit::UNSOLVABLE
     } else {
         exit::OK
     })
+}
+
+/// The CSV file, one row appended and flushed per problem as soon as it is known: an
+/// interrupted run keeps the rows of the problems it finished. Rows come in the order the
+/// problems finish (the run order with `--jobs 1`).
+struct CsvFile {
+    path: PathBuf,
+    file: std::fs::File,
+    /// The first failed write, reported when the run ends.
+    error: Option<std::io::Error>,
+}
+
+impl CsvFile {
+    const HEADER: &str =
+        "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,message\n";
+
+    /// Creates (truncates) the file and writes the header.
+    fn create(path: &Path) -> anyhow::Result<CsvFile> {
+        let mut file = std::fs::File::create(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        file.write_all(Self::HEADER.as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(CsvFile {
+            path: path.to_path_buf(),
+            file,
+            error: None,
+        })
+    }
+
+    /// Appends one row (unbuffered: the row is in the file when this returns).
+    fn append(&mut self, r: &Row) {
+        if self.error.is_some() {
+            return;
+        }
+        let fields = [
+            csv_field(&r.domain_name),
+            csv_field(&r.problem),
+            csv_field(&r.status),
+            format!("{:.3}", r.time_s),
+            r.nodes.to_string(),
+            r.peak_kb.to_string(),
+            r.plan_len.to_string(),
+            r.validated.to_string(),
+            csv_field(&r.message),
+        ];
+        let line = fields.join(",") + "\n";
+        if let Err(e) = self.file.write_all(line.as_bytes()) {
+            self.error = Some(e);
+        }
+    }
+
+    /// The first write error, if any.
+    fn finish(self) -> anyhow::Result<()> {
+        match self.error {
+            Some(e) => Err(e).with_context(|| format!("cannot write {}", self.path.display())),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A CSV field as RFC 4180 writes it: quoted when it holds a comma, a quote or a line break,
+/// with quotes doubled.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::csv_field;
+
+    #[test]
+    fn csv_fields_are_quoted_as_rfc_4180_says() {
+        assert_eq!(csv_field("plain"), "plain");
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(csv_field("two\nlines"), "\"two\nlines\"");
+    }
 }

@@ -33,9 +33,16 @@ pub fn run_plan(
     oracle: OracleConfig,
     out: &Outputs,
 ) -> anyhow::Result<u8> {
+    let began = std::time::Instant::now();
     let domain = htn::load_domain(domain_path)?;
     let problem = htn::load_problem(problem_path, &domain)?;
     let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
+    // The time limit covers reading the files: the planner gets what is left.
+    let mut planner = planner;
+    planner.limits.time = planner
+        .limits
+        .time
+        .map(|t| t.saturating_sub(began.elapsed()));
     let options = RunOptions { planner, oracle };
     let run = hybrid::plan(
         &domain,

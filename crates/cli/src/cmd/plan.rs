@@ -1,7 +1,6 @@
 //! `htngtp plan`: plan an HDDL problem with the HTN planner, validate the plan, print it.
 
 use std::path::PathBuf;
-use std::time::Duration;
 
 use anyhow::Context;
 use htn::planner::{Limits, Outcome, PlannerOptions, Strategy};
@@ -25,15 +24,19 @@ pub struct Args {
     pub domain: PathBuf,
     /// The HDDL problem file.
     pub problem: PathBuf,
-    /// Stop after this many seconds.
-    #[arg(long, value_name = "S")]
-    pub time_limit: Option<f64>,
+    /// Stop after this many seconds (above 0, at most a year). Checked inside the search's
+    /// every node, inside each geometric task call, and after parsing and compiling.
+    #[arg(long, value_name = "S", default_value_t = DEFAULT_TIME_LIMIT_S,
+          value_parser = crate::input::seconds)]
+    pub time_limit: f64,
     /// Stop after expanding this many search nodes.
     #[arg(long, value_name = "N")]
     pub node_limit: Option<u64>,
-    /// Stop when the process's resident memory exceeds this many MiB.
-    #[arg(long, value_name = "MB")]
-    pub memory_limit: Option<u64>,
+    /// Stop when the process's resident memory exceeds this many MiB (checked every 10 ms
+    /// of search).
+    #[arg(long, value_name = "MB", default_value_t = DEFAULT_MEMORY_LIMIT_MB,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub memory_limit: u64,
     /// Seed of the search (it is deterministic for a given seed).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -68,7 +71,28 @@ pub struct Args {
     /// plan (0 turns the fallback off, 1 starts with it).
     #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
     pub best_first_share: f64,
+    /// End as soon as stdin closes: `bench-hddl` gives its children a pipe that closes when it
+    /// ends, however it ends (a signal, even SIGKILL), so no child outlives it.
+    #[arg(long, hide = true)]
+    pub exit_with_stdin: bool,
 }
+
+/// With `--exit-with-stdin`: a thread that ends the process when stdin reaches its end.
+fn exit_when_stdin_closes() {
+    std::thread::spawn(|| {
+        use std::io::Read;
+        let mut buf = [0u8; 64];
+        let mut stdin = std::io::stdin();
+        while matches!(stdin.read(&mut buf), Ok(n) if n > 0) {}
+        eprintln!("stopped: the parent process ended");
+        std::process::exit(exit::LIMIT.into());
+    });
+}
+
+/// The default `--time-limit`: nothing runs unbounded.
+pub const DEFAULT_TIME_LIMIT_S: f64 = 300.0;
+/// The default `--memory-limit`, MiB (8 GiB).
+pub const DEFAULT_MEMORY_LIMIT_MB: u64 = 8192;
 
 fn share(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
@@ -89,13 +113,20 @@ pub enum StrategyArg {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    if args.exit_with_stdin {
+        exit_when_stdin_closes();
+    }
+    let scene = args.scene.as_deref();
+    crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
+    let began = std::time::Instant::now();
     let domain = htn::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let options = PlannerOptions {
         limits: Limits {
-            time: args.time_limit.map(Duration::from_secs_f64),
+            // The time limit covers parsing: the planner gets what is left.
+            time: Some(crate::input::duration(args.time_limit).saturating_sub(began.elapsed())),
             nodes: args.node_limit,
-            memory_mb: args.memory_limit,
+            memory_mb: Some(args.memory_limit),
         },
         seed: args.seed,
         strategy: match args.strategy {

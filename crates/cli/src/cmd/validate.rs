@@ -29,6 +29,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    crate::input::check_files([&*args.domain, &*args.problem, &*args.plan])?;
     let domain = htn::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let text = std::fs::read_to_string(&args.plan)

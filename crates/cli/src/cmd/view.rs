@@ -7,6 +7,7 @@ use std::fs;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
 use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, bail};
@@ -76,6 +77,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
 
 /// Reads the plan once up front to warn about what the page would reject; `Err` if unreadable.
 fn check_plan(plan: &Path) -> anyhow::Result<Option<String>> {
+    crate::input::check_file(plan)?;
     let text = fs::read_to_string(plan)
         .with_context(|| format!("cannot read the plan {}", plan.display()))?;
     let value: serde_json::Value = match serde_json::from_str(&text) {
@@ -168,17 +170,34 @@ impl Response {
     }
 }
 
-/// Accepts connections until `max` have been handled (forever with `None`), one thread each.
+/// The most connections served at once, each on its own thread. Beyond it, the accepting
+/// thread serves the connection itself (the next waits: back-pressure, not more threads).
+pub const MAX_CONNECTIONS: usize = 32;
+
+/// Accepts connections until `max` have been handled (forever with `None`), each on a thread
+/// of its own while fewer than `threads` are busy, else on the accepting thread. When no
+/// thread can be started the connection is dropped with a message; the server goes on.
 pub fn serve(listener: &TcpListener, site: &Site, max: Option<usize>) {
+    serve_with(listener, site, max, MAX_CONNECTIONS);
+}
+
+fn serve_with(listener: &TcpListener, site: &Site, max: Option<usize>, threads: usize) {
+    let busy = AtomicUsize::new(0);
     std::thread::scope(|scope| {
         for (handled, stream) in listener.incoming().enumerate() {
             match stream {
+                Ok(stream) if busy.load(Ordering::SeqCst) >= threads => answer(stream, site),
                 Ok(stream) => {
-                    scope.spawn(move || {
-                        if let Err(e) = handle(stream, site) {
-                            eprintln!("htngtp view: {e}");
-                        }
+                    busy.fetch_add(1, Ordering::SeqCst);
+                    let busy = &busy;
+                    let spawned = std::thread::Builder::new().spawn_scoped(scope, move || {
+                        answer(stream, site);
+                        busy.fetch_sub(1, Ordering::SeqCst);
                     });
+                    if let Err(e) = spawned {
+                        busy.fetch_sub(1, Ordering::SeqCst);
+                        eprintln!("htngtp view: cannot start a thread ({e}); connection dropped");
+                    }
                 }
                 Err(e) => eprintln!("htngtp view: accept failed: {e}"),
             }
@@ -187,6 +206,13 @@ pub fn serve(listener: &TcpListener, site: &Site, max: Option<usize>) {
             }
         }
     });
+}
+
+/// Serves one connection, reporting (not propagating) its error.
+fn answer(stream: TcpStream, site: &Site) {
+    if let Err(e) = handle(stream, site) {
+        eprintln!("htngtp view: {e}");
+    }
 }
 
 fn handle(mut stream: TcpStream, site: &Site) -> std::io::Result<()> {
@@ -429,6 +455,37 @@ mod tests {
         let (root, site) = fixture("symlink");
         std::os::unix::fs::symlink(root.join("secret.txt"), root.join("dist/link.txt")).unwrap();
         assert_eq!(site.respond("/link.txt").status, 403);
+        fs::remove_dir_all(root).unwrap();
+    }
+
+    /// With a pool of one thread, clients that arrive together are all answered (the
+    /// accepting thread serves those beyond the pool).
+    #[test]
+    fn a_full_pool_still_answers_every_client() {
+        let (root, site) = fixture("pool");
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let n = 6;
+        let replies = std::thread::scope(|s| {
+            s.spawn(|| serve_with(&listener, &site, Some(n), 1));
+            let clients: Vec<_> = (0..n)
+                .map(|_| {
+                    s.spawn(move || {
+                        let mut c = TcpStream::connect(addr).unwrap();
+                        c.write_all(b"GET /plan.json HTTP/1.1\r\nHost: x\r\n\r\n")
+                            .unwrap();
+                        let mut out = String::new();
+                        c.read_to_string(&mut out).unwrap();
+                        out
+                    })
+                })
+                .collect();
+            clients
+                .into_iter()
+                .map(|c| c.join().unwrap())
+                .collect::<Vec<_>>()
+        });
+        assert!(replies.iter().all(|r| r.starts_with("HTTP/1.1 200 OK\r\n")));
         fs::remove_dir_all(root).unwrap();
     }
 

@@ -3,7 +3,7 @@
 //! with their free slots listed (the binder picks the next literal by what is bound), and the
 //! methods of every task listed in domain order.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use crate::model::{
     ArithOp, CompareOp, Domain, Effect, Formula, NumExpr, NumericEffectOp, OBJECT_TYPE, Problem,
@@ -313,6 +313,9 @@ impl Builder<'_> {
             .iter()
             .chain(problem.objects.iter())
             .collect();
+        // (type, object) pairs recorded: a linear `contains` per object was quadratic (160k
+        // objects of one type took seconds, past any time limit).
+        let mut member: HashSet<(usize, u32)> = HashSet::new();
         for o in all {
             let id = match self.c.object_ids.get(&o.name) {
                 Some(&id) => id,
@@ -331,7 +334,7 @@ impl Builder<'_> {
                     continue;
                 }
                 let tid = self.type_id(&t) as usize;
-                if !self.c.type_objects[tid].contains(&id) {
+                if member.insert((tid, id)) {
                     self.c.type_objects[tid].push(id);
                 }
                 if let Some(ps) = parents.get(&t) {

@@ -215,13 +215,15 @@ pub enum PlanError {
 }
 
 /// Plans `problem` in `domain`. `oracle` answers evaluable predicates; without one, a domain
-/// with GS actions is refused with [`PlanError::NoOracle`].
+/// with GS actions is refused with [`PlanError::NoOracle`]. The time limit covers compiling
+/// too (and the geometric back end's initial facts): the search's clock starts before it.
 pub fn plan<'o>(
     domain: &Domain,
     problem: &Problem,
     options: &PlannerOptions,
     oracle: Option<&'o mut (dyn GeometricOracle + 'o)>,
 ) -> Result<SearchResult, PlanError> {
+    let began = std::time::Instant::now();
     let compiled = compile::compile(domain, problem)?;
     if oracle.is_none()
         && let Some(a) = compiled.actions.iter().find(|a| a.evaluable.is_some())
@@ -232,7 +234,9 @@ pub fn plan<'o>(
             task: compiled.geo_tasks[g as usize].clone(),
         });
     }
-    search::Search::new(&compiled, options, oracle)?.run()
+    search::Search::new(&compiled, options, oracle)?
+        .started_at(began)
+        .run()
 }
 
 /// Resident memory of this process in KiB, from `/proc/self/statm` (0 where unavailable).

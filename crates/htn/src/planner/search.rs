@@ -26,6 +26,33 @@ const LOOP_WINDOW: usize = 32;
 /// An unknown argument in a partially ground task (only in goal-relevance reasoning).
 const WILD: u32 = u32::MAX;
 
+/// How often the search reads its resident memory (a read of /proc costs microseconds).
+const MEMORY_CHECK_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
+/// The bytes a vector allocates when its next push doubles it (0 while it has room).
+pub(super) fn vec_growth<T>(len: usize, capacity: usize) -> usize {
+    if len < capacity {
+        0
+    } else {
+        capacity.max(4) * 2 * std::mem::size_of::<T>()
+    }
+}
+
+/// The bytes a hash set allocates when its next insert doubles it (0 while it has room):
+/// twice its buckets, each an entry and a control byte.
+pub(super) fn set_growth<T, S>(set: &HashSet<T, S>) -> usize {
+    table_growth::<T>(set.len(), set.capacity())
+}
+
+/// [`set_growth`] of a hash table of `len` entries of type `T` with room for `capacity`.
+pub(super) fn table_growth<T>(len: usize, capacity: usize) -> usize {
+    if len < capacity {
+        0
+    } else {
+        (capacity.max(4) * 2).next_power_of_two() * (std::mem::size_of::<T>() + 1)
+    }
+}
+
 /// Whether `f` is a literal over static facts (or equality).
 fn is_static_lit(c: &Compiled, f: &CFormula) -> bool {
     match f {
@@ -230,6 +257,10 @@ pub(crate) struct Search<'a, 'o> {
     loop_check: bool,
     stats: SearchStats,
     start: Instant,
+    /// When the resident memory is read next (every [`MEMORY_CHECK_EVERY`]).
+    next_memory_check: Instant,
+    /// A table's doubling would have passed the memory limit ([`Search::growth_fits`]).
+    memory_reached: bool,
     effects: EffectBuf,
     mode: Mode,
     forced: VecDeque<Key>,
@@ -351,6 +382,8 @@ impl<'a, 'o> Search<'a, 'o> {
             loop_check: opts.loop_check,
             stats: SearchStats::default(),
             start: Instant::now(),
+            next_memory_check: Instant::now(),
+            memory_reached: false,
             effects: EffectBuf::default(),
             mode: Mode::Normal,
             forced: VecDeque::new(),
@@ -363,8 +396,22 @@ impl<'a, 'o> Search<'a, 'o> {
         })
     }
 
+    /// Counts the limits and the statistics' time from `t` (before compiling) instead of from
+    /// when the search was made.
+    pub fn started_at(mut self, t: Instant) -> Self {
+        self.start = t;
+        self
+    }
+
     pub fn run(mut self) -> Result<SearchResult, PlanError> {
-        self.start = Instant::now();
+        let deadline = self
+            .opts
+            .limits
+            .time
+            .and_then(|t| self.start.checked_add(t));
+        if let Some(o) = self.oracle.as_deref_mut() {
+            o.set_deadline(deadline);
+        }
         let outcome = loop {
             self.stats.iterations += 1;
             self.stats.depth_bound = self.bound;
@@ -446,6 +493,10 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
+    /// The limits, checked at every node: the clock is cheap (tens of nanoseconds, far below
+    /// a node's cost), so a limit stops the search within one node of it, however costly nodes
+    /// are (best-first nodes, geometric calls). The resident memory costs a read of /proc, so
+    /// it is read every [`MEMORY_CHECK_EVERY`] of search instead.
     fn check_limits(&mut self) -> Option<Limit> {
         let l = self.opts.limits;
         if let Some(n) = l.nodes
@@ -453,22 +504,43 @@ impl<'a, 'o> Search<'a, 'o> {
         {
             return Some(Limit::Nodes);
         }
-        if self.stats.nodes % 256 == 0
-            && let Some(t) = l.time
-            && self.start.elapsed() >= t
+        if self.memory_reached {
+            return Some(Limit::Memory);
+        }
+        let now = Instant::now();
+        if let Some(t) = l.time
+            && now.duration_since(self.start) >= t
         {
             return Some(Limit::Time);
         }
-        if self.stats.nodes % 4096 == 0 {
+        if now >= self.next_memory_check {
+            self.next_memory_check = now + MEMORY_CHECK_EVERY;
             let rss = current_rss_kb();
             self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(rss);
             if let Some(mb) = l.memory_mb
-                && rss > mb * 1024
+                && rss > mb.saturating_mul(1024)
             {
                 return Some(Limit::Memory);
             }
         }
         None
+    }
+
+    /// Whether the search may grow a table by `extra` bytes (while it doubles, the old and the
+    /// new table are both resident) within the memory limit; if not, the memory limit is
+    /// marked reached, for [`Search::check_limits`]. `extra` 0 (nothing doubles) costs nothing.
+    pub(super) fn growth_fits(&mut self, extra: usize) -> bool {
+        let Some(mb) = self.opts.limits.memory_mb else {
+            return true;
+        };
+        if extra == 0 {
+            return true;
+        }
+        let fits = current_rss_kb() + (extra as u64 >> 10) <= mb.saturating_mul(1024);
+        if !fits {
+            self.memory_reached = true;
+        }
+        fits
     }
 
     fn dfs(&mut self) -> Result<Stop, PlanError> {
@@ -480,8 +552,7 @@ impl<'a, 'o> Search<'a, 'o> {
             if let Some(l) = self.check_limits() {
                 return Ok(Stop::Limit(l));
             }
-            if self.stats.nodes % 256 == 0
-                && let Some(t) = self.switch_at
+            if let Some(t) = self.switch_at
                 && self.start.elapsed() >= t
             {
                 return Ok(Stop::Switch);
@@ -780,6 +851,11 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     fn first_visit(&mut self, net_hash: u64) -> bool {
+        if !self.growth_fits(set_growth(&self.visited)) {
+            // The table would double past the memory limit: stop (at the next check) rather
+            // than grow. Taking the node as new loses nothing, the search ends there.
+            return true;
+        }
         let h = self.state_fingerprint();
         self.visited.insert(((h as u128) << 64) | net_hash as u128)
     }

@@ -18,9 +18,9 @@ use std::hash::BuildHasherDefault;
 use crate::state::{FxHasher, FxMap};
 
 use super::super::compile::{CTerm, Compiled};
-use super::super::current_rss_kb;
 use super::super::eval::{Eval, UNBOUND};
-use super::{NIL, Search, Step, Stop, TreeRec};
+use super::super::{Limit, current_rss_kb};
+use super::{Cell, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth};
 
 /// An unreachable cost.
 pub(super) const INF: u32 = u32::MAX / 4;
@@ -313,6 +313,17 @@ impl<'a, 'o> Search<'a, 'o> {
         while let Some(Reverse((_, _, ni))) = open.pop() {
             self.stats.nodes += 1;
             self.stats.best_first_nodes += 1;
+            let growth = vec_growth::<Node>(nodes.len(), nodes.capacity())
+                + vec_growth::<Reverse<(u32, u64, u32)>>(open.len(), open.capacity())
+                + set_growth(&seen)
+                + vec_growth::<Box<[u32]>>(states.list.len(), states.list.capacity())
+                + table_growth::<(Box<[u32]>, u32)>(states.ids.len(), states.ids.capacity())
+                + table_growth::<((u32, u32, u8), u32)>(hr.memo.len(), hr.memo.capacity())
+                + vec_growth::<u32>(cell_cost.len(), cell_cost.capacity())
+                + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
+            if !self.growth_fits(growth) {
+                return Stop::Limit(Limit::Memory);
+            }
             if let Some(l) = self.check_limits() {
                 return Stop::Limit(l);
             }

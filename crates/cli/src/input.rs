@@ -1,0 +1,90 @@
+//! Checks on the command line's values and input files, before anything is read: limits that
+//! are numbers a clock can hold, and files that are files of a sensible size.
+
+use std::path::Path;
+use std::time::Duration;
+
+/// The longest time limit accepted (a year): longer is a typing error, and `inf`, `nan` or
+/// `1e20` cannot be a `Duration`.
+const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
+
+/// The default cap on an input file, in MiB (HDDL, scene, plan, plan JSON); the environment
+/// variable `HTNGTP_MAX_INPUT_MIB` sets another.
+pub const DEFAULT_MAX_INPUT_MIB: u64 = 256;
+
+/// The clap value parser of a time limit in seconds: a finite number above 0, at most a year.
+pub fn seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= MAX_SECONDS => Ok(v),
+        _ => Err(format!(
+            "expected seconds, a number above 0 and at most {MAX_SECONDS} (a year), found `{s}`"
+        )),
+    }
+}
+
+/// A time limit as a `Duration` (the value passed [`seconds`]; clamped to be safe).
+pub fn duration(s: f64) -> Duration {
+    Duration::from_secs_f64(s.clamp(0.0, MAX_SECONDS))
+}
+
+/// The input cap in bytes: `HTNGTP_MAX_INPUT_MIB` if set to a number, else the default.
+pub fn max_input_bytes() -> u64 {
+    std::env::var("HTNGTP_MAX_INPUT_MIB")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(DEFAULT_MAX_INPUT_MIB)
+        .saturating_mul(1 << 20)
+}
+
+/// Refuses an input that is not a regular file of at most [`max_input_bytes`]: a directory, a
+/// device (`/dev/zero`, `/dev/urandom`: endless), or a file too large to read whole. Pipes and
+/// FIFOs pass (their size is unknown until read).
+pub fn check_file(path: &Path) -> anyhow::Result<()> {
+    use std::os::unix::fs::FileTypeExt;
+    let meta = std::fs::metadata(path)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    let kind = meta.file_type();
+    let cap = max_input_bytes();
+    if kind.is_dir() {
+        anyhow::bail!("{}: is a directory, not a file", path.display());
+    }
+    if kind.is_char_device() || kind.is_block_device() || kind.is_socket() {
+        anyhow::bail!("{}: is a device, not a file", path.display());
+    }
+    if meta.len() > cap {
+        anyhow::bail!(
+            "{}: the file is {} MiB, more than the {} MiB input cap (HTNGTP_MAX_INPUT_MIB sets it)",
+            path.display(),
+            meta.len() >> 20,
+            cap >> 20
+        );
+    }
+    Ok(())
+}
+
+/// [`check_file`] for each path.
+pub fn check_files<'a>(paths: impl IntoIterator<Item = &'a Path>) -> anyhow::Result<()> {
+    paths.into_iter().try_for_each(check_file)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn time_limits_must_be_finite_positive_and_at_most_a_year() {
+        for bad in ["inf", "nan", "1e20", "-1", "0", "", "x"] {
+            let e = seconds(bad).unwrap_err();
+            assert!(e.contains(&format!("`{bad}`")), "{e}");
+        }
+        assert_eq!(seconds("2.5"), Ok(2.5));
+    }
+
+    #[test]
+    fn devices_and_directories_are_refused() {
+        let e = check_file(Path::new("/dev/zero")).unwrap_err().to_string();
+        assert!(e.contains("is a device"), "{e}");
+        let e = check_file(Path::new("/")).unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+    }
+}
