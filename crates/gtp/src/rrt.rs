@@ -159,7 +159,7 @@ impl Default for RrtParams {
             time_limit: Duration::from_millis(500),
             deadline: None,
             shortcut_iterations: 10,
-            certify_factor: 4,
+            certify_factor: 16,
         }
     }
 }

@@ -17,7 +17,7 @@ use crate::rrt::{JointPath, RrtParams};
 /// shoulders (metres): elbows bent, the object over the lap.
 const HOLD_FORWARD: f32 = 0.35;
 const HOLD_BELOW: f32 = 0.2;
-/// Fractions of the way from the hand-over to the holding point tried, nearest the chest first.
+/// Fractions of the way from the hand-over to the holding point tried, nearest the body first.
 const HOLD_FRACTIONS: [f32; 4] = [1.0, 0.75, 0.5, 0.25];
 
 /// The person's planned motions of one take.
@@ -37,8 +37,8 @@ pub struct TakeMotion {
 
 /// Plans a take of `object` by `person`'s arm `arm`: the reach in `before` (the robot holding
 /// the object out), the withdraw in `after` (the robot drawn back). The reach's end, the hand on
-/// the object, fixes the grasp; the object is not an obstacle to the hand reaching it. The error
-/// says which motion failed and why.
+/// the object, just clear of it, fixes the grasp; from then on the object is rigid in the hand.
+/// The error says which motion failed and why.
 pub fn plan_take(
     person: &RobotSetup,
     arm: usize,
@@ -51,7 +51,8 @@ pub fn plan_take(
     let h = person.agent;
     let a = &person.arms[arm];
     let q0 = before.agent_state(h).q.clone();
-    let reach_motion = arm_motion(person, arm, before, object, None)?;
+    // The object is in the way of the hand on its way there: the hand ends just clear of it.
+    let reach_motion = arm_motion_among(person, arm, before, &[], None, object)?;
     let qa0 = robot::arm_values(a, &q0);
     if let Some(c) = reach_motion.collision(&qa0) {
         return Err(format!(
@@ -113,6 +114,9 @@ fn reach_goal(
         let Some(q) = m.ik(target, &seed, 2, rng) else {
             continue;
         };
+        if hand_depth(m, &q, world, object) > 0.0 {
+            continue;
+        }
         match m.collision(&q) {
             None => return Ok(q),
             Some(c) => last = c,
@@ -134,7 +138,7 @@ fn reach_goal(
             };
             q = s;
             let depth = hand_depth(m, &q, world, object);
-            if depth == 0.0 {
+            if depth == 0.0 && off > 0.0 {
                 match m.collision(&q) {
                     None => return Ok(q),
                     Some(c) => last = c,
@@ -188,11 +192,24 @@ fn arm_motion<'s>(
     object: ObjectId,
     held: Option<Pose>,
 ) -> Result<ArmMotion<'s>, String> {
+    arm_motion_among(person, arm, world, &[object], held, object)
+}
+
+/// A motion planner for the person's arm in `world` among every object but `skip` (the object
+/// released from the robot's gripper, an obstacle where it is unless skipped).
+fn arm_motion_among<'s>(
+    person: &'s RobotSetup,
+    arm: usize,
+    world: &World,
+    skip: &[ObjectId],
+    held: Option<Pose>,
+    object: ObjectId,
+) -> Result<ArmMotion<'s>, String> {
     let a = &person.arms[arm];
     let h = person.agent;
     let mut released = world.clone();
     released.detach(object);
-    let obstacles = Arc::new(robot::obstacles(&released, h, &[object]));
+    let obstacles = Arc::new(robot::obstacles(&released, h, skip));
     let held = held
         .map(|g| robot::held_object(world, person, a, object, g))
         .transpose()?;
@@ -205,7 +222,7 @@ fn arm_motion<'s>(
 }
 
 /// The way back from the hand-over `from`: to the first free holding posture, nearest the
-/// chest first, that a collision-free path reaches; none found, the person keeps the object
+/// body first, that a collision-free path reaches; none found, the person keeps the object
 /// where they took it (a one-waypoint path).
 fn withdraw(
     carry: &ArmMotion,
@@ -214,9 +231,9 @@ fn withdraw(
     rng: &mut fastrand::Rng,
 ) -> JointPath {
     let handover = carry.tool_pose(from).translation;
-    let chest = holding_point(carry);
+    let hold = holding_point(carry);
     for f in HOLD_FRACTIONS {
-        let target = handover + (chest - handover) * f;
+        let target = handover + (hold - handover) * f;
         let Some(q) = position_ik(carry, from, target, rng) else {
             continue;
         };
