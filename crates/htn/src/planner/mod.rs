@@ -207,7 +207,8 @@ pub enum PlanError {
 }
 
 /// Plans `problem` in `domain`. `oracle` answers evaluable predicates; without one, a domain
-/// with GS actions is refused with [`PlanError::NoOracle`].
+/// with GS actions is refused with [`PlanError::NoOracle`]. A plan found spells its names as
+/// the files declare them.
 pub fn plan<'o>(
     domain: &Domain,
     problem: &Problem,
@@ -224,7 +225,11 @@ pub fn plan<'o>(
             task: compiled.geo_tasks[g as usize].clone(),
         });
     }
-    search::Search::new(&compiled, options, oracle)?.run()
+    let mut result = search::Search::new(&compiled, options, oracle)?.run()?;
+    if let Outcome::Found { plan } = &mut result.outcome {
+        plan.respell(domain, problem);
+    }
+    Ok(result)
 }
 
 /// Resident memory of this process in KiB, from `/proc/self/statm` (0 where unavailable).
