@@ -143,7 +143,10 @@ fn an_unknown_action_is_rejected() {
         .replace("debit alice", "steal alice");
     plan = Plan::parse(&text).unwrap();
     let f = fault(&d, &p, &plan);
-    assert!(f.contains("task `steal` is not declared in the domain"), "{f}");
+    assert!(
+        f.contains("task `steal` is not declared in the domain"),
+        "{f}"
+    );
     let f = lenient_fault(&d, &p, &plan);
     assert!(f.contains("subtask 1 of method `m6-debit-account`"), "{f}");
 }
@@ -173,12 +176,20 @@ fn a_duplicate_id_is_rejected() {
 #[test]
 fn names_must_be_spelled_as_declared_unless_lenient() {
     let (d, p, plan) = good();
-    let text = plan.to_competition_format().replace(" debit alice", " Debit alice");
+    let text = plan
+        .to_competition_format()
+        .replace(" debit alice", " Debit alice");
     let upper = Plan::parse(&text).unwrap();
     let f = fault(&d, &p, &upper);
-    assert!(f.contains("task `Debit` is not declared in the domain (declared as `debit`)"), "{f}");
+    assert!(
+        f.contains("task `Debit` is not declared in the domain (declared as `debit`)"),
+        "{f}"
+    );
     validate_with(&d, &p, &upper, &[], Names::CaseInsensitive).unwrap();
     let text = plan.to_competition_format().replace(" alice", " ALICE");
     let f = fault(&d, &p, &Plan::parse(&text).unwrap());
-    assert!(f.contains("argument `ALICE` is not an object of the problem (declared as `alice`)"), "{f}");
+    assert!(
+        f.contains("argument `ALICE` is not an object of the problem (declared as `alice`)"),
+        "{f}"
+    );
 }

@@ -4,8 +4,8 @@
 use std::collections::HashMap;
 
 use crate::model::{
-    Action, Domain, Formula, Method, OBJECT_TYPE, Signature, SourceName, Span, Spelling, Spellings, TypeDecl,
-    TypedName,
+    Action, Domain, Formula, Method, OBJECT_TYPE, Signature, SourceName, Span, Spelling, Spellings,
+    TypeDecl, TypedName,
 };
 
 use super::context::{Ctx, Result, Scope, Tables};

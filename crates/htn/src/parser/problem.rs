@@ -3,8 +3,8 @@
 use std::collections::HashMap;
 
 use crate::model::{
-    Domain, Formula, InitFact, InitValue, Problem, Signature, SourceName, Span, Spellings, TaskNetwork,
-    Term,
+    Domain, Formula, InitFact, InitValue, Problem, Signature, SourceName, Span, Spellings,
+    TaskNetwork, Term,
 };
 
 use super::context::{Ctx, Result, Scope, Tables, is_name, looks_numeric, parse_number};
