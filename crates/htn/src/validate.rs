@@ -106,6 +106,57 @@ pub fn validate_with(
         Names::CaseInsensitive => plan.lowercased(),
     };
     check(domain, problem, &folded, shared_init)
+        .map_err(|f| Fault(respell_message(domain, problem, &f.0)))
+}
+
+/// `message` with every name between backticks, double quotes or parentheses spelled as
+/// declared (the checks run on case-folded names; messages should show the files' spelling).
+/// A name right after the word `method` is looked up among the methods first.
+fn respell_message(domain: &Domain, problem: &Problem, message: &str) -> String {
+    let sp = &domain.spelling;
+    let tables = [
+        &problem.spelling.objects,
+        &sp.objects,
+        &sp.tasks,
+        &sp.methods,
+        &sp.predicates,
+        &sp.types,
+    ];
+    let spell = |w: &str, after_method: bool| -> Option<String> {
+        let first = after_method.then_some(&sp.methods);
+        first
+            .into_iter()
+            .chain(tables)
+            .find_map(|t| t.declared(w))
+            .filter(|d| d.eq_ignore_ascii_case(w))
+            .map(str::to_string)
+    };
+    let is_name_char = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_';
+    let (mut out, mut word, mut prev) = (String::new(), String::new(), String::new());
+    let (mut quoted, mut depth) = (false, 0usize);
+    for c in message.chars().chain(std::iter::once('\0')) {
+        if is_name_char(c) {
+            word.push(c);
+            continue;
+        }
+        let inside = quoted || depth > 0;
+        match spell(&word, prev == "method").filter(|_| inside) {
+            Some(d) => out.push_str(&d),
+            None => out.push_str(&word),
+        }
+        if !word.is_empty() {
+            prev = std::mem::take(&mut word);
+        }
+        match c {
+            '`' | '"' => quoted = !quoted,
+            '(' => depth += 1,
+            ')' => depth = depth.saturating_sub(1),
+            '\0' => continue,
+            _ => {}
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// Refuses a name not spelled as declared, as pandaPIparser's verifier does: an action or task

@@ -66,3 +66,19 @@ fn a_plan_in_another_case_is_valid_only_when_lenient() {
     );
     validate_with(&d, &p, &plan, &[], Names::CaseInsensitive).unwrap();
 }
+
+#[test]
+fn faults_name_things_as_the_files_spell_them() {
+    let (d, p) = model();
+    let text = "==>\n1 Move Kitchen Kitchen\nroot 0\n0 GoTo Kitchen -> goto 1\n<==\n";
+    let plan = htn::plan::Plan::parse(text).unwrap();
+    let f = validate(&d, &p, &plan, &[]).unwrap_err().0;
+    assert!(
+        f.contains("task 0 (GoTo Kitchen): the precondition of method `goto` does not hold"),
+        "{f}"
+    );
+    let text = "==>\n1 Move Hall Kitchen\nroot 0\n0 GoTo Hall -> goto 1\n<==\n";
+    let plan = htn::plan::Plan::parse(text).unwrap();
+    let f = validate(&d, &p, &plan, &[]).unwrap_err().0;
+    assert!(f.contains(r#"is `GoTo` with arguments ["Hall"]"#), "{f}");
+}
