@@ -390,7 +390,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                             row.domain_name, row.problem, row.status, row.message
                         ));
                     }
-                    rows.lock().expect("rows")[i] = Some(row);
+                    let mut all = rows.lock().expect("rows");
+                    all[i] = Some(row);
+                    if let Some(path) = &args.csv {
+                        let done: Vec<Row> = all.iter().flatten().cloned().collect();
+                        if let Err(e) = write_csv(path, &done) {
+                            bar.println(format!("{e:#}"));
+                        }
+                    }
+                    drop(all);
                     bar.inc(1);
                 }
             });
@@ -461,29 +469,35 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         .filter(|r| r.official == "rejected" || r.official == "error")
         .count();
     if let Some(path) = &args.csv {
-        let mut s = String::from(
-            "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,official,message\n",
-        );
-        for r in &rows {
-            s.push_str(&format!(
-                "{},{},{},{:.3},{},{},{},{},{},\"{}\"\n",
-                r.domain_name,
-                r.problem,
-                r.status,
-                r.time_s,
-                r.nodes,
-                r.peak_kb,
-                r.plan_len,
-                r.validated,
-                r.official,
-                r.message.replace('"', "'")
-            ));
-        }
-        std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))?;
+        write_csv(path, &rows)?;
     }
     Ok(if invalid_all > 0 || refused > 0 {
         exit::UNSOLVABLE
     } else {
         exit::OK
     })
+}
+
+/// Writes the CSV, one row per problem run so far (rewritten after every problem, so that a run
+/// stopped early keeps what it measured).
+fn write_csv(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
+    let mut s = String::from(
+        "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,official,message\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{:.3},{},{},{},{},{},\"{}\"\n",
+            r.domain_name,
+            r.problem,
+            r.status,
+            r.time_s,
+            r.nodes,
+            r.peak_kb,
+            r.plan_len,
+            r.validated,
+            r.official,
+            r.message.replace('"', "'")
+        ));
+    }
+    std::fs::write(path, s).with_context(|| format!("cannot write {}", path.display()))
 }
