@@ -128,7 +128,6 @@ fn respell_message(domain: &Domain, problem: &Problem, message: &str) -> String 
             .into_iter()
             .chain(tables)
             .find_map(|t| t.declared(w))
-            .filter(|d| d.eq_ignore_ascii_case(w))
             .map(str::to_string)
     };
     let is_name_char = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_';
