@@ -1,7 +1,9 @@
 //! The lifted HTN domain and problem, as written in HDDL.
 //!
 //! This is what the parser produces and what the planner and the validator consume. Names are
-//! stored lower-cased (HDDL names are case-insensitive); every item keeps the [`Span`] where it
+//! stored lower-cased (HDDL names are case-insensitive), and [`Spellings`] keep how the file
+//! spelled each declaration, for output (the competition's verifier matches names exactly);
+//! every item keeps the [`Span`] where it
 //! was written so later stages can report errors at file:line:column. Subtask lists are always
 //! stored in their single total order, whatever spelling the file used.
 //!
@@ -10,6 +12,7 @@
 //! file, and *geometric tasks*, which an action's precondition can ask about through an
 //! *evaluable predicate* (see [`Formula::Evaluable`]).
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -25,6 +28,52 @@ pub type SourceName = Arc<PathBuf>;
 
 /// The root type every object has, whether declared or not.
 pub const OBJECT_TYPE: &str = "object";
+
+/// The declared spelling of names of one namespace: case-folded name to the spelling of its
+/// first declaration (`achievecontainsshotcocktail` to `AchieveContainsShotCocktail`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Spelling(BTreeMap<String, String>);
+
+impl Spelling {
+    /// Records `raw` as the spelling of its case-folded name, unless one is recorded already.
+    pub fn declare(&mut self, raw: &str) {
+        self.0
+            .entry(raw.to_ascii_lowercase())
+            .or_insert_with(|| raw.to_string());
+    }
+
+    /// The declared spelling of the case-folded `name`; `name` itself when none was recorded.
+    pub fn of<'a>(&'a self, name: &'a str) -> &'a str {
+        self.0.get(name).map_or(name, String::as_str)
+    }
+
+    /// The declared spelling of `name` whatever its case, if it is declared at all.
+    pub fn declared(&self, name: &str) -> Option<&str> {
+        self.0.get(&name.to_ascii_lowercase()).map(String::as_str)
+    }
+
+    /// Adds every spelling of `other` not recorded here.
+    pub fn extend(&mut self, other: &Spelling) {
+        for (k, v) in &other.0 {
+            self.0.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
+}
+
+/// How a file spells its declarations, one table per namespace (a method may share its name
+/// with a task, spelled differently).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Spellings {
+    /// Types.
+    pub types: Spelling,
+    /// Constants and objects.
+    pub objects: Spelling,
+    /// Predicates, shared predicates and functions.
+    pub predicates: Spelling,
+    /// Abstract tasks and actions (one namespace in HDDL).
+    pub tasks: Spelling,
+    pub methods: Spelling,
+}
 
 /// A name with a type, as in a parameter list or an object list: `?b - book`.
 #[derive(Clone, Debug, PartialEq)]
@@ -218,6 +267,8 @@ pub struct Domain {
     /// Methods in domain order (the order encodes preference).
     pub methods: Vec<Method>,
     pub actions: Vec<Action>,
+    /// How the file spells its declared names.
+    pub spelling: Spellings,
 }
 
 /// A ground fact of the initial state.
@@ -259,4 +310,6 @@ pub struct Problem {
     pub htn: TaskNetwork,
     /// `:goal`, checked on the final state when present.
     pub goal: Formula,
+    /// How the file spells its objects (the other namespaces stay empty).
+    pub spelling: Spellings,
 }

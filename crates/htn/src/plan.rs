@@ -16,6 +16,7 @@ use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::{Domain, Problem};
 use crate::oracle::GroundAtom;
 
 /// A primitive action of the plan.
@@ -99,8 +100,8 @@ impl Plan {
     }
 
     /// Reads a plan in the competition format. Text before `==>` (a planner's log) and after
-    /// `<==` is ignored; without `==>` the whole text is read as the plan. Names are lower-cased
-    /// (HDDL is case-insensitive).
+    /// `<==` is ignored; without `==>` the whole text is read as the plan. Names keep their
+    /// spelling: the strict validator matches them exactly, as the competition's verifier does.
     pub fn parse(text: &str) -> Result<Plan, PlanParseError> {
         let lines: Vec<&str> = text.lines().collect();
         let start = lines
@@ -119,7 +120,7 @@ impl Plan {
             if line == "<==" {
                 break;
             }
-            let words: Vec<String> = line.split_whitespace().map(str::to_lowercase).collect();
+            let words: Vec<String> = line.split_whitespace().map(str::to_string).collect();
             if words[0] == "root" {
                 if seen_root {
                     return Err(err(n, "a second `root` line".into()));
@@ -182,6 +183,60 @@ impl Plan {
         }
         Ok(plan)
     }
+}
+
+impl Plan {
+    /// The plan with every name case-folded, as the model stores names.
+    pub fn lowercased(&self) -> Plan {
+        let mut p = self.clone();
+        p.map_names(|_, n| n.to_ascii_lowercase());
+        p
+    }
+
+    /// Spells every name as `domain` and `problem` declare it (names of the model are
+    /// case-folded; the competition's verifier wants them as the files write them).
+    pub fn respell(&mut self, domain: &Domain, problem: &Problem) {
+        self.map_names(|kind, n| {
+            let d = &domain.spelling;
+            match kind {
+                NameKind::Task => d.tasks.of(n).to_string(),
+                NameKind::Method => d.methods.of(n).to_string(),
+                NameKind::Object => problem
+                    .spelling
+                    .objects
+                    .declared(n)
+                    .or_else(|| d.objects.declared(n))
+                    .unwrap_or(n)
+                    .to_string(),
+            }
+        });
+    }
+
+    /// Replaces every name (actions, tasks, methods, arguments) by `f(kind, name)`.
+    fn map_names(&mut self, f: impl Fn(NameKind, &str) -> String) {
+        let objects = |args: &mut Vec<String>| {
+            for a in args.iter_mut() {
+                *a = f(NameKind::Object, a);
+            }
+        };
+        for a in &mut self.actions {
+            a.name = f(NameKind::Task, &a.name);
+            objects(&mut a.args);
+        }
+        for d in &mut self.decompositions {
+            d.task = f(NameKind::Task, &d.task);
+            d.method = f(NameKind::Method, &d.method);
+            objects(&mut d.args);
+        }
+    }
+}
+
+/// The namespace of a name in a plan.
+#[derive(Clone, Copy)]
+enum NameKind {
+    Task,
+    Method,
+    Object,
 }
 
 fn parse_id(w: &str) -> Result<u32, String> {

@@ -6,7 +6,7 @@ use std::path::Path;
 use htn::model::{Domain, Problem};
 use htn::plan::{Plan, PlanAction};
 use htn::planner::{Outcome, PlannerOptions, plan};
-use htn::validate::validate;
+use htn::validate::{Names, validate, validate_with};
 
 fn load(problem: &str) -> (Domain, Problem) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/domains");
@@ -27,6 +27,13 @@ fn good() -> (Domain, Problem, Plan) {
 
 fn fault(d: &Domain, p: &Problem, plan: &Plan) -> String {
     validate(d, p, plan, &[]).expect_err("a broken plan").0
+}
+
+/// The fault the lenient validator (names in any case, undeclared names left to later checks) finds.
+fn lenient_fault(d: &Domain, p: &Problem, plan: &Plan) -> String {
+    validate_with(d, p, plan, &[], Names::CaseInsensitive)
+        .expect_err("a broken plan")
+        .0
 }
 
 #[test]
@@ -120,7 +127,10 @@ fn a_wrong_root_is_rejected() {
     let text = plan
         .to_competition_format()
         .replace("0 serve alice", "0 serve bob");
-    let f = fault(&d, &p, &Plan::parse(&text).unwrap());
+    let broken = Plan::parse(&text).unwrap();
+    let f = fault(&d, &p, &broken);
+    assert!(f.contains("argument `bob` is not an object"), "{f}");
+    let f = lenient_fault(&d, &p, &broken);
     assert!(f.contains("root task 0"), "{f}");
 }
 
@@ -133,6 +143,11 @@ fn an_unknown_action_is_rejected() {
         .replace("debit alice", "steal alice");
     plan = Plan::parse(&text).unwrap();
     let f = fault(&d, &p, &plan);
+    assert!(
+        f.contains("task `steal` is not declared in the domain"),
+        "{f}"
+    );
+    let f = lenient_fault(&d, &p, &plan);
     assert!(f.contains("subtask 1 of method `m6-debit-account`"), "{f}");
 }
 
@@ -156,4 +171,25 @@ fn a_duplicate_id_is_rejected() {
     plan.actions[1].id = plan.actions[0].id;
     let f = fault(&d, &p, &plan);
     assert!(f.contains("used by two actions"), "{f}");
+}
+
+#[test]
+fn names_must_be_spelled_as_declared_unless_lenient() {
+    let (d, p, plan) = good();
+    let text = plan
+        .to_competition_format()
+        .replace(" debit alice", " Debit alice");
+    let upper = Plan::parse(&text).unwrap();
+    let f = fault(&d, &p, &upper);
+    assert!(
+        f.contains("task `Debit` is not declared in the domain (declared as `debit`)"),
+        "{f}"
+    );
+    validate_with(&d, &p, &upper, &[], Names::CaseInsensitive).unwrap();
+    let text = plan.to_competition_format().replace(" alice", " ALICE");
+    let f = fault(&d, &p, &Plan::parse(&text).unwrap());
+    assert!(
+        f.contains("argument `ALICE` is not an object of the problem (declared as `alice`)"),
+        "{f}"
+    );
 }

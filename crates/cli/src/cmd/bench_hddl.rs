@@ -24,9 +24,12 @@ use crate::exit;
                         `further-instances-not-used-in-ipc/`) are not run.\n\nEach problem runs in \
                         a child process (`htngtp plan --json`) with the limits, so a crash cannot \
                         stop the run and peak memory (VmHWM) is measured per problem. Every plan \
-                        is validated again here. Prints per domain: solved/total, median time of \
-                        the solved, peak memory; a total line; writes a CSV with one row per \
-                        problem."
+                        is validated again here, and with --verifier also by an external \
+                        verifier (pandaPIparser: `PATH --verify DOMAIN PROBLEM PLAN`, exit 0 and \
+                        `Plan verification result: true` meaning accepted). Prints per domain: \
+                        solved/total, median time of the solved, peak memory, plans the external \
+                        verifier accepted and rejected; a total line; writes a CSV with one row \
+                        per problem (both verdicts)."
 )]
 pub struct Args {
     /// The benchmark directory (one folder per domain).
@@ -52,7 +55,14 @@ pub struct Args {
     /// Seed passed to every run.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also check every plan with this external verifier (the competition's: pandaPIparser,
+    /// run as `PATH --verify DOMAIN PROBLEM PLAN`).
+    #[arg(long, value_name = "PATH")]
+    pub verifier: Option<PathBuf>,
 }
+
+/// Seconds the external verifier may take on one plan.
+const VERIFIER_TIMEOUT_S: u64 = 300;
 
 struct Job {
     domain_name: String,
@@ -70,6 +80,8 @@ struct Row {
     peak_kb: u64,
     plan_len: usize,
     validated: bool,
+    /// The external verifier's verdict: `accepted`, `rejected`, `error`, or empty (not run).
+    official: String,
     message: String,
 }
 
@@ -216,15 +228,112 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
     row.peak_kb = v["peak_memory_kb"].as_u64().unwrap_or(0);
     if row.status == "found" {
         row.plan_len = v["plan"]["actions"].as_array().map_or(0, Vec::len);
-        match revalidate(job, v["plan_text"].as_str().unwrap_or("")) {
+        let text = v["plan_text"].as_str().unwrap_or("");
+        match revalidate(job, text) {
             Ok(()) => row.validated = true,
             Err(e) => {
                 row.status = "invalid".into();
                 row.message = e.to_string();
             }
         }
+        if let Some(verifier) = &args.verifier {
+            let (verdict, why) = official_verdict(verifier, job, text);
+            row.official = verdict.into();
+            if !why.is_empty() {
+                row.message = format!("{} official: {why}", row.message)
+                    .trim()
+                    .to_string();
+            }
+        }
     }
     row
+}
+
+/// The external verifier's verdict on `text` (`accepted`, `rejected` or `error`) and, unless
+/// accepted, the first of its checks that failed (or why it could not run).
+fn official_verdict(verifier: &Path, job: &Job, text: &str) -> (&'static str, String) {
+    let file = std::env::temp_dir().join(format!(
+        "htngtp-bench-{}-{}-{}.plan",
+        std::process::id(),
+        job.domain_name,
+        job.problem
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+    ));
+    if let Err(e) = std::fs::write(&file, text) {
+        return ("error", format!("cannot write {}: {e}", file.display()));
+    }
+    let mut cmd = Command::new(verifier);
+    cmd.arg("--verify")
+        .arg(&job.domain)
+        .arg(&job.problem)
+        .arg(&file);
+    let result = run_bounded(cmd, Duration::from_secs(VERIFIER_TIMEOUT_S));
+    let _ = std::fs::remove_file(&file);
+    match result {
+        Err(e) => ("error", e),
+        Ok((code, out)) => {
+            let out = strip_ansi(&out);
+            if code == Some(0) && out.contains("Plan verification result: true") {
+                ("accepted", String::new())
+            } else {
+                let failed = out
+                    .lines()
+                    .find(|l| l.ends_with(": false") && !l.contains("result"))
+                    .unwrap_or("verification result: false");
+                ("rejected", failed.to_string())
+            }
+        }
+    }
+}
+
+/// Runs `cmd` to its end or `limit` (then kills it); its exit code and stdout.
+fn run_bounded(mut cmd: Command, limit: Duration) -> Result<(Option<i32>, String), String> {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("cannot start {:?}: {e}", cmd.get_program()))?;
+    let mut out = child.stdout.take().expect("piped stdout");
+    let out_t = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let start = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(s)) => break Ok(s.code()),
+            Ok(None) if start.elapsed() > limit => {
+                let _ = child.kill();
+                let _ = child.wait();
+                break Err(format!("no verdict within {} s", limit.as_secs()));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(5)),
+            Err(e) => break Err(e.to_string()),
+        }
+    };
+    let stdout = out_t.join().unwrap_or_default();
+    status.map(|code| (code, stdout))
+}
+
+/// `text` without terminal colour codes (`ESC [ ... m`).
+fn strip_ansi(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            for c in chars.by_ref() {
+                if c == 'm' {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// Validates a plan here, apart from the child that found it.
@@ -278,7 +387,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                             .to_string_lossy()
                     ));
                     let row = run_one(&exe, &args, job);
-                    if row.status == "invalid" || row.status == "crash" {
+                    if row.status == "invalid"
+                        || row.status == "crash"
+                        || row.official == "rejected"
+                    {
                         bar.println(format!(
                             "{} {}: {} {}",
                             row.domain_name, row.problem, row.status, row.message
@@ -306,9 +418,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         by_domain.entry(&r.domain_name).or_default().push(r);
     }
     println!(
-        "{:<34} {:>8} {:>10} {:>12} {:>9} {:>9}",
-        "domain", "solved", "median s", "peak MiB", "limit", "invalid"
+        "{:<34} {:>8} {:>10} {:>12} {:>9} {:>9} {:>9} {:>9}",
+        "domain", "solved", "median s", "peak MiB", "limit", "invalid", "accepted", "rejected"
     );
+    let official = |rs: &[&Row], v: &str| -> String {
+        if args.verifier.is_none() {
+            return "-".into();
+        }
+        rs.iter().filter(|r| r.official == v).count().to_string()
+    };
     let (mut solved_all, mut total_all, mut invalid_all) = (0, 0, 0);
     let mut peak_all = 0u64;
     let mut times_all = Vec::new();
@@ -324,28 +442,37 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         invalid_all += invalid;
         peak_all = peak_all.max(peak);
         println!(
-            "{:<34} {:>8} {:>10} {:>12.1} {:>9} {:>9}",
+            "{:<34} {:>8} {:>10} {:>12.1} {:>9} {:>9} {:>9} {:>9}",
             d,
             format!("{}/{}", solved.len(), rs.len()),
             median(times).map_or("-".into(), |m| format!("{m:.3}")),
             peak as f64 / 1024.0,
             limit,
-            invalid
+            invalid,
+            official(rs, "accepted"),
+            official(rs, "rejected")
         );
     }
+    let all: Vec<&Row> = rows.iter().collect();
     println!(
-        "{:<34} {:>8} {:>10} {:>12.1} {:>9} {:>9}",
+        "{:<34} {:>8} {:>10} {:>12.1} {:>9} {:>9} {:>9} {:>9}",
         "TOTAL",
         format!("{solved_all}/{total_all}"),
         median(times_all).map_or("-".into(), |m| format!("{m:.3}")),
         peak_all as f64 / 1024.0,
         rows.iter().filter(|r| r.status == "limit-reached").count(),
-        invalid_all
+        invalid_all,
+        official(&all, "accepted"),
+        official(&all, "rejected")
     );
+    let refused = rows
+        .iter()
+        .filter(|r| r.official == "rejected" || r.official == "error")
+        .count();
     if let Some(f) = csv.into_inner().expect("csv") {
         f.finish()?;
     }
-    Ok(if invalid_all > 0 {
+    Ok(if invalid_all > 0 || refused > 0 {
         exit::UNSOLVABLE
     } else {
         exit::OK
@@ -364,7 +491,7 @@ struct CsvFile {
 
 impl CsvFile {
     const HEADER: &str =
-        "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,message\n";
+        "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,official,message\n";
 
     /// Creates (truncates) the file and writes the header.
     fn create(path: &Path) -> anyhow::Result<CsvFile> {
@@ -393,6 +520,7 @@ impl CsvFile {
             r.peak_kb.to_string(),
             r.plan_len.to_string(),
             r.validated.to_string(),
+            csv_field(&r.official),
             csv_field(&r.message),
         ];
         let line = fields.join(",") + "\n";

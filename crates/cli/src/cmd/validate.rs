@@ -16,7 +16,9 @@ use crate::exit;
                         tasks, subtasks in order with consistent arguments, method preconditions \
                         hold before each method's first action). The plan may be in the \
                         competition format (text between `==>` and `<==`) or the JSON that \
-                        `htngtp plan --json` prints.\n\nExit codes: 0 valid, 1 invalid (the first \
+                        `htngtp plan --json` prints. Names must be spelled exactly as the domain \
+                        and problem files declare them, as the competition's verifier \
+                        (pandaPIparser --verify) requires; --lenient matches them in any case.\n\nExit codes: 0 valid, 1 invalid (the first \
                         fault is printed), 3 bad input."
 )]
 pub struct Args {
@@ -26,6 +28,10 @@ pub struct Args {
     pub problem: PathBuf,
     /// The plan file.
     pub plan: PathBuf,
+    /// Match names whatever their case (HDDL is case-insensitive), for hand-written plans; the
+    /// competition's verifier would refuse a plan that needs this.
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
@@ -48,7 +54,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         htn::plan::Plan::parse(&text)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.plan.display()))?
     };
-    match htn::validate::validate(&domain, &problem, &plan, &[]) {
+    let names = if args.lenient {
+        htn::validate::Names::CaseInsensitive
+    } else {
+        htn::validate::Names::Exact
+    };
+    match htn::validate::validate_with(&domain, &problem, &plan, &[], names) {
         Ok(()) => {
             println!(
                 "valid: {} actions, {} decompositions",

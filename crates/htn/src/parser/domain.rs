@@ -4,7 +4,8 @@
 use std::collections::HashMap;
 
 use crate::model::{
-    Action, Domain, Formula, Method, OBJECT_TYPE, Signature, SourceName, Span, TypeDecl, TypedName,
+    Action, Domain, Formula, Method, OBJECT_TYPE, Signature, SourceName, Span, Spelling, Spellings,
+    TypeDecl, TypedName,
 };
 
 use super::context::{Ctx, Result, Scope, Tables};
@@ -123,6 +124,7 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
         geometric_tasks: Vec::new(),
         methods: Vec::new(),
         actions: Vec::new(),
+        spelling: Spellings::default(),
     };
 
     // Sort the sections by kind, keeping file order within a kind.
@@ -261,7 +263,7 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     }
 
     // Tasks and actions share one namespace (a subtask names either).
-    for t in task_decls {
+    for t in &task_decls {
         let sig = task_decl(&ctx, t)?;
         declare(&sig, "task")?;
         domain.tasks.push(sig);
@@ -275,7 +277,7 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     ctx.t = Tables::new(file, &domain, &action_sigs)?;
 
     let mut mseen: HashMap<String, Span> = HashMap::new();
-    for m in methods {
+    for m in &methods {
         let method = method(&ctx, m)?;
         if let Some(s) = mseen.insert(method.name.clone(), method.span) {
             return Err(ParseError::new(
@@ -294,7 +296,55 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     for (a, sig) in actions.iter().zip(action_sigs) {
         domain.actions.push(action_body(&ctx, a, sig)?);
     }
+    domain.spelling = domain_spellings(&part, &task_decls, &methods, &actions);
     Ok(domain)
+}
+
+/// How the domain file spells its declarations (read from the s-expressions once they parsed).
+fn domain_spellings<'s>(
+    part: &dyn Fn(&str) -> Option<&'s [Sexp]>,
+    task_decls: &[&Sexp],
+    methods: &[&Sexp],
+    actions: &[&Sexp],
+) -> Spellings {
+    let mut sp = Spellings::default();
+    for t in part(":types").unwrap_or_default() {
+        if let Some(raw) = t.as_raw().filter(|r| *r != "-") {
+            sp.types.declare(raw);
+        }
+    }
+    spell_typed(part(":constants").unwrap_or_default(), &mut sp.objects);
+    for key in [":predicates", ":shared-predicates", ":functions"] {
+        for p in part(key).unwrap_or_default() {
+            spell_at(p, 0, &mut sp.predicates);
+        }
+    }
+    for t in task_decls.iter().chain(actions) {
+        spell_at(t, 1, &mut sp.tasks);
+    }
+    for m in methods {
+        spell_at(m, 1, &mut sp.methods);
+    }
+    sp
+}
+
+/// Records the spellings of the names of a typed list `a b - t c` (not of its types).
+pub(crate) fn spell_typed(items: &[Sexp], into: &mut Spelling) {
+    let mut after_dash = false;
+    for item in items {
+        match item.as_raw() {
+            Some("-") => after_dash = true,
+            Some(raw) if !after_dash => into.declare(raw),
+            _ => after_dash = false,
+        }
+    }
+}
+
+/// Records the spelling of the atom at `items[i]` of the list `item`, if there is one.
+fn spell_at(item: &Sexp, i: usize, into: &mut Spelling) {
+    if let Some(raw) = item.as_list().and_then(|l| l.get(i)).and_then(Sexp::as_raw) {
+        into.declare(raw);
+    }
 }
 
 /// `:types` entries `a b - c d - e f`; a type may get several parents over several entries.

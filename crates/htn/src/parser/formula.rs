@@ -268,7 +268,7 @@ impl Ctx<'_> {
     /// A numeric expression.
     pub fn num_expr(&self, s: &Sexp, scope: &Scope) -> Result<NumExpr> {
         let items = match s {
-            Sexp::Atom { text, span } => {
+            Sexp::Atom { text, span, .. } => {
                 return match parse_number(text) {
                     Some(v) => Ok(NumExpr::Number(v)),
                     None if looks_numeric(text) => {

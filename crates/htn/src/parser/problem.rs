@@ -3,7 +3,8 @@
 use std::collections::HashMap;
 
 use crate::model::{
-    Domain, Formula, InitFact, InitValue, Problem, Signature, SourceName, Span, TaskNetwork, Term,
+    Domain, Formula, InitFact, InitValue, Problem, Signature, SourceName, Span, Spellings,
+    TaskNetwork, Term,
 };
 
 use super::context::{Ctx, Result, Scope, Tables, is_name, looks_numeric, parse_number};
@@ -103,6 +104,11 @@ pub fn parse_problem(
     }
 
     // Objects join the domain's constants.
+    let mut spelling = Spellings::default();
+    super::domain::spell_typed(
+        sections.get(":objects").map(|s| s.1).unwrap_or_default(),
+        &mut spelling.objects,
+    );
     let declared = ctx.typed_list(
         sections.get(":objects").map(|s| s.1).unwrap_or_default(),
         false,
@@ -154,6 +160,7 @@ pub fn parse_problem(
         init_values,
         htn,
         goal,
+        spelling,
     })
 }
 

@@ -1,6 +1,8 @@
 //! Lexer and s-expression reader: HDDL text to a tree of atoms and lists with positions.
 //!
-//! Atoms are lower-cased (HDDL names are case-insensitive). Comments run from `;` to the end of
+//! Atoms are lower-cased (HDDL names are case-insensitive: later stages match on the folded
+//! text) and keep their spelling as written, so that declarations can record how the file spells
+//! each name and output can print it that way. Comments run from `;` to the end of
 //! the line. The reader is iterative and refuses nesting deeper than [`MAX_DEPTH`], so the
 //! recursive stages after it cannot overflow the stack whatever the input.
 
@@ -14,8 +16,12 @@ pub const MAX_DEPTH: usize = 256;
 /// An s-expression with the position of its first character.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) enum Sexp {
-    /// A symbol, variable, keyword or number, lower-cased.
-    Atom { text: String, span: Span },
+    /// A symbol, variable, keyword or number: `text` lower-cased, `raw` as written.
+    Atom {
+        text: String,
+        raw: String,
+        span: Span,
+    },
     /// A parenthesised list; `span` is its `(`.
     List { items: Vec<Sexp>, span: Span },
 }
@@ -30,6 +36,14 @@ impl Sexp {
     pub(crate) fn as_atom(&self) -> Option<&str> {
         match self {
             Sexp::Atom { text, .. } => Some(text),
+            Sexp::List { .. } => None,
+        }
+    }
+
+    /// The atom as the file spells it (not case-folded).
+    pub(crate) fn as_raw(&self) -> Option<&str> {
+        match self {
+            Sexp::Atom { raw, .. } => Some(raw),
             Sexp::List { .. } => None,
         }
     }
@@ -51,10 +65,10 @@ impl Sexp {
     /// A short description for error messages: the atom quoted, or the list's head.
     pub(crate) fn describe(&self) -> String {
         match self {
-            Sexp::Atom { text, .. } => format!("`{}`", shorten(text)),
+            Sexp::Atom { raw, .. } => format!("`{}`", shorten(raw)),
             Sexp::List { items, .. } => match items.first() {
                 None => "`()`".to_string(),
-                Some(Sexp::Atom { text, .. }) => format!("`({} ...)`", shorten(text)),
+                Some(Sexp::Atom { raw, .. }) => format!("`({} ...)`", shorten(raw)),
                 Some(Sexp::List { .. }) => "a list of lists".to_string(),
             },
         }
@@ -139,11 +153,10 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
                     width = width.saturating_add(1);
                     chars.next();
                 }
+                let raw = text.get(start..end).unwrap_or_default();
                 let atom = Sexp::Atom {
-                    text: text
-                        .get(start..end)
-                        .unwrap_or_default()
-                        .to_ascii_lowercase(),
+                    text: raw.to_ascii_lowercase(),
+                    raw: raw.to_string(),
                     span,
                 };
                 match stack.last_mut() {
@@ -182,6 +195,7 @@ mod tests {
         let items = top[0].as_list().unwrap();
         assert_eq!(top[0].span(), Span { line: 2, col: 1 });
         assert_eq!(items[0].as_atom(), Some("a"));
+        assert_eq!(items[0].as_raw(), Some("A"));
         assert_eq!(items[1].span(), Span { line: 2, col: 4 });
         assert_eq!(items[1].as_list().unwrap()[1].as_atom(), Some("?x"));
         assert_eq!(items[2].as_atom(), Some(":k"));

@@ -216,7 +216,8 @@ pub enum PlanError {
 
 /// Plans `problem` in `domain`. `oracle` answers evaluable predicates; without one, a domain
 /// with GS actions is refused with [`PlanError::NoOracle`]. The time limit covers compiling
-/// too (and the geometric back end's initial facts): the search's clock starts before it.
+/// too (and the geometric back end's initial facts): the search's clock starts before it. A plan
+/// found spells its names as the files declare them.
 pub fn plan<'o>(
     domain: &Domain,
     problem: &Problem,
@@ -234,9 +235,13 @@ pub fn plan<'o>(
             task: compiled.geo_tasks[g as usize].clone(),
         });
     }
-    search::Search::new(&compiled, options, oracle)?
+    let mut result = search::Search::new(&compiled, options, oracle)?
         .started_at(began)
-        .run()
+        .run()?;
+    if let Outcome::Found { plan } = &mut result.outcome {
+        plan.respell(domain, problem);
+    }
+    Ok(result)
 }
 
 /// Resident memory of this process in KiB, from `/proc/self/statm` (0 where unavailable).
