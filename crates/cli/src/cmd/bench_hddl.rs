@@ -490,8 +490,7 @@ struct CsvFile {
 }
 
 impl CsvFile {
-    const HEADER: &str =
-        "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,official,message\n";
+    const HEADER: &str = "domain,problem,status,time_s,nodes,peak_memory_kb,plan_length,validated,official,message\n";
 
     /// Creates (truncates) the file and writes the header.
     fn create(path: &Path) -> anyhow::Result<CsvFile> {
