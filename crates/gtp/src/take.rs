@@ -107,11 +107,10 @@ fn reach_goal(
     let palm = Rotation::from_rotation_arc(Vector::Y, -normal);
     let at = surface + normal * (PALM_HALF_THICKNESS + PALM_CLEARANCE);
     let mut last = "inverse kinematics does not get there".to_string();
-    let mut seed = qa0.to_vec();
     for t in 0..REACH_TURNS {
-        let turn = (t % REACH_TURNS) as f32 * std::f32::consts::TAU / REACH_TURNS as f32;
+        let turn = t as f32 * std::f32::consts::TAU / REACH_TURNS as f32;
         let target = Pose::from_parts(at, Rotation::from_axis_angle(normal, turn) * palm);
-        let Some(q) = m.ik(target, &seed, 2, rng) else {
+        let Some(q) = m.ik(target, qa0, 2, rng) else {
             continue;
         };
         if hand_depth(m, &q, world, object) > 0.0 {
@@ -124,11 +123,10 @@ fn reach_goal(
     }
     // The wrist cannot turn the palm that way: the hand where it gets to, backed off along the
     // normal by how deep it sinks into the object.
+    let mut seed = qa0.to_vec();
     for t in 0..REACH_TRIES {
         if t > 0 {
             m.arm.space.sample(rng, &mut seed);
-        } else {
-            seed = qa0.to_vec();
         }
         let mut off = 0.0;
         let mut q = seed.clone();
