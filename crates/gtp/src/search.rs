@@ -1671,6 +1671,28 @@ impl Search {
         ))
     }
 
+    /// `after` with each robot gripper opened as the last of `trajectories` moving its arm
+    /// left it: the world the next task plans in is the one the plan shows.
+    fn grippers_as_left(&self, mut after: World, trajectories: &[Trajectory]) -> World {
+        let robot = self.setup.agent;
+        let (base, mut q) = {
+            let st = after.agent_state(robot);
+            (st.base, st.q.clone())
+        };
+        let name = self.world.agent(robot).name();
+        for arm in &self.setup.arms {
+            let last = trajectories
+                .iter()
+                .rev()
+                .find(|t| t.agent == name && t.arm == arm.name);
+            if let Some(t) = last {
+                set_opening(&self.setup.model, arm, &mut q, t.gripper_opening);
+            }
+        }
+        after.set_agent_config(robot, base, &q);
+        after
+    }
+
     /// The world after a placement: object `o` settled from its release `pose` onto the
     /// surface, the robot in its starting posture.
     fn placed_world(&self, o: ObjectId, pose: Pose) -> World {
@@ -1957,6 +1979,7 @@ impl Search {
         level: u8,
         trajectories: Vec<Trajectory>,
     ) -> Solution {
+        let after = self.grippers_as_left(after, &trajectories);
         let ch = self.choices[ci];
         let o = self.object.unwrap();
         let reach_effort = self.human.and_then(|h| {
