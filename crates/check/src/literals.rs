@@ -9,7 +9,7 @@ use parry3d::math::{Pose, Vector};
 use parry3d::query::{Ray, RayCast};
 
 use crate::bodies::{Owner, Placed, is_grasping_link, links_at, objects_at};
-use crate::model::{AgentKind, Plan, Step};
+use crate::model::{AgentKind, Literal, Plan, Step};
 use crate::report::{Fault, FaultKind};
 use crate::world::World;
 
@@ -31,10 +31,34 @@ pub const GRID: usize = 48;
 
 /// Re-measure the step's added and deleted literals; returns how many were measured.
 pub fn check_literals(plan: &Plan, world: &World, step: &Step, faults: &mut Vec<Fault>) -> usize {
-    let claims =
-        (step.added.iter().map(|l| (l, true))).chain(step.deleted.iter().map(|l| (l, false)));
+    let claims = (step.added.iter().map(|l| (l, true, "added")))
+        .chain(step.deleted.iter().map(|l| (l, false, "deleted")));
+    measure(plan, world, step, claims, faults)
+}
+
+/// Re-measure, after a step that moved something, the `visible` and `reachable` literals that
+/// hold from earlier steps (the plan's `initial_literals` and what steps added since): a
+/// placement that hides another object must have deleted its `visible`.
+pub fn check_persisting<'a>(
+    plan: &Plan,
+    world: &World,
+    step: &Step,
+    persisting: impl Iterator<Item = &'a Literal>,
+    faults: &mut Vec<Fault>,
+) -> usize {
+    let claims = persisting.map(|l| (l, true, "persisting"));
+    measure(plan, world, step, claims, faults)
+}
+
+fn measure<'a>(
+    plan: &Plan,
+    world: &World,
+    step: &Step,
+    claims: impl Iterator<Item = (&'a Literal, bool, &'static str)>,
+    faults: &mut Vec<Fault>,
+) -> usize {
     let mut measured = 0;
-    for (lit, claimed) in claims {
+    for (lit, claimed, how) in claims {
         let [pred, x, a] = lit.as_slice() else {
             continue;
         };
@@ -59,7 +83,7 @@ pub fn check_literals(plan: &Plan, world: &World, step: &Step, faults: &mut Vec<
                 trajectory_index: None,
                 frame: None,
                 a: format!("({})", lit.join(" ")),
-                b: if claimed { "added" } else { "deleted" }.to_string(),
+                b: how.to_string(),
                 depth_mm: 0.0,
                 configs: 1,
                 detail,

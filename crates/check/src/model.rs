@@ -88,6 +88,9 @@ pub struct Plan {
     pub objects: Vec<Object>,
     pub agents: Vec<Agent>,
     pub steps: Vec<Step>,
+    /// The shared literals true before the first step (`initial_literals`; absent in older plan
+    /// JSONs): with them the claimed state is known after every step.
+    pub initial_literals: Option<Vec<Literal>>,
 }
 
 impl Plan {

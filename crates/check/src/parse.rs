@@ -139,6 +139,7 @@ fn plan(root: Node) -> Res<Plan> {
         objects,
         agents,
         steps: Vec::new(),
+        initial_literals: root.opt("initial_literals", |n| n.array(|l| l.array(|a| a.str())))?,
     };
     p.steps = root.get("steps", |n| n.array(|s| step(s, &p)))?;
     Ok(p)

@@ -4,8 +4,8 @@ use std::collections::BTreeSet;
 
 use crate::Options;
 use crate::bodies::Adjacency;
-use crate::literals::check_literals;
-use crate::model::{Plan, Step, Trajectory};
+use crate::literals::{check_literals, check_persisting};
+use crate::model::{Literal, Plan, Step, Trajectory};
 use crate::report::{Fault, FaultKind, Report};
 use crate::rest::check_rest;
 use crate::sweep::{Carry, Sweep};
@@ -26,6 +26,9 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
     };
     let mut world = World::initial(plan);
     let mut resting = check_rest(plan, &world, None, opts, &BTreeSet::new(), &mut report);
+    // The claimed state, when the plan says where it starts.
+    let mut state: Option<BTreeSet<&Literal>> =
+        plan.initial_literals.as_ref().map(|l| l.iter().collect());
     for step in &plan.steps {
         release_handed_over(plan, step, &mut world);
         let mut declared = BTreeSet::new();
@@ -46,6 +49,17 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
         }
         resting = check_rest(plan, &world, Some(step), opts, &resting, &mut report);
         report.literals += check_literals(plan, &world, step, &mut report.faults);
+        if let Some(state) = &mut state {
+            for l in &step.deleted {
+                state.remove(l);
+            }
+            if !step.trajectories.is_empty() {
+                let persisting = state.iter().copied().filter(|l| !step.added.contains(l));
+                report.literals +=
+                    check_persisting(plan, &world, step, persisting, &mut report.faults);
+            }
+            state.extend(&step.added);
+        }
     }
     report
 }

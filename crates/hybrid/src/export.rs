@@ -337,6 +337,7 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
         "status": status,
         "message": message,
         "scene": scene_json(&run.initial),
+        "initial_literals": run.oracle.initial_literals().iter().map(atom_json).collect::<Vec<_>>(),
         "tree": tree,
         "root": root,
         "steps": steps,
