@@ -474,6 +474,55 @@ fn stale_literals() {
     );
 }
 
+/// A step that hides the book behind a board must delete `(visible book bot)`: with the plan's
+/// initial literals the checker knows it is still claimed (the cluttered desk's stale literal).
+#[test]
+fn persisting_literal_hidden_by_a_step_is_stale() {
+    let hidden = |initial: bool| {
+        let mut plan = clean_plan();
+        plan["scene"]["objects"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({
+            "name": "board", "movable": true,
+            "shape": { "box": { "half_extents": [0.02, 0.6, 0.5] } }, "pose": at(3.0, 3.0, 0.5) }));
+        if initial {
+            plan["initial_literals"] = json!([["visible", "book", "bot"]]);
+        }
+        let traj = plan["steps"][0]["gtp"]["trajectories"][0].clone();
+        let between = json!({ "board": at(0.45, 0.0, 1.25) });
+        push_step(
+            &mut plan,
+            "hide",
+            "board",
+            vec![traj],
+            json!([]),
+            json!([]),
+            between,
+        );
+        let r = check(&plan);
+        let stale: Vec<(usize, String, String)> = r
+            .faults
+            .iter()
+            .filter(|f| f.kind == FaultKind::StaleLiteral)
+            .map(|f| (f.step.unwrap(), f.a.clone(), f.b.clone()))
+            .collect();
+        stale
+    };
+    assert_eq!(
+        hidden(true),
+        vec![(
+            1,
+            "(visible book bot)".to_string(),
+            "persisting".to_string()
+        )]
+    );
+    assert!(
+        hidden(false).is_empty(),
+        "without initial literals only changes are measured"
+    );
+}
+
 #[test]
 fn undeclared_carry_is_a_fault_and_checked_as_carried() {
     let mut plan = scene();
