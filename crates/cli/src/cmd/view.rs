@@ -227,11 +227,33 @@ fn handle(mut stream: TcpStream, site: &Site) -> std::io::Result<()> {
     };
     let mut parts = head.lines().next().unwrap_or("").split_whitespace();
     let (method, target) = (parts.next().unwrap_or(""), parts.next().unwrap_or(""));
+    let port = stream.local_addr()?.port();
     let response = match method {
+        _ if !host_allowed(&head, port) => Response::text(
+            403,
+            "forbidden: the Host header must be 127.0.0.1:PORT or localhost:PORT\n",
+        ),
         "GET" | "HEAD" => site.respond(target),
         _ => Response::text(405, "only GET and HEAD are served\n"),
     };
     write_response(&mut stream, &response, method != "HEAD")
+}
+
+/// Whether the request's one `Host` header names this server on loopback (`127.0.0.1:PORT` or
+/// `localhost:PORT`), so that a page reaching it through DNS rebinding is refused.
+fn host_allowed(head: &str, port: u16) -> bool {
+    let hosts: Vec<&str> = head
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split_once(':'))
+        .filter(|(name, _)| name.trim().eq_ignore_ascii_case("host"))
+        .map(|(_, value)| value.trim())
+        .collect();
+    let [host] = hosts[..] else {
+        return false;
+    };
+    let host = host.to_ascii_lowercase();
+    host == format!("127.0.0.1:{port}") || host == format!("localhost:{port}")
 }
 
 /// The request line and headers, up to the blank line.
@@ -472,8 +494,10 @@ mod tests {
                 .map(|_| {
                     s.spawn(move || {
                         let mut c = TcpStream::connect(addr).unwrap();
-                        c.write_all(b"GET /plan.json HTTP/1.1\r\nHost: x\r\n\r\n")
-                            .unwrap();
+                        c.write_all(
+                            format!("GET /plan.json HTTP/1.1\r\nHost: {addr}\r\n\r\n").as_bytes(),
+                        )
+                        .unwrap();
                         let mut out = String::new();
                         c.read_to_string(&mut out).unwrap();
                         out
@@ -494,11 +518,22 @@ mod tests {
         let (root, site) = fixture("tcp");
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
         let addr = listener.local_addr().unwrap();
+        let port = addr.port();
         let requests = [
-            "GET /plan.json HTTP/1.1\r\nHost: x\r\n\r\n",
-            "HEAD / HTTP/1.1\r\nHost: x\r\n\r\n",
-            "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n",
-            "GET /../secret.txt HTTP/1.1\r\nHost: x\r\n\r\n",
+            format!("GET /plan.json HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n"),
+            format!("HEAD / HTTP/1.1\r\nHost: localhost:{port}\r\n\r\n"),
+            format!("POST / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nContent-Length: 0\r\n\r\n"),
+            format!("GET /../secret.txt HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n"),
+            // DNS rebinding: a page of evil.example resolved to 127.0.0.1.
+            format!("GET /plan.json HTTP/1.1\r\nHost: evil.example:{port}\r\n\r\n"),
+            "GET /plan.json HTTP/1.1\r\n\r\n".to_string(),
+            format!(
+                "GET /plan.json HTTP/1.1\r\nHost: 127.0.0.1:{}\r\n\r\n",
+                port ^ 1
+            ),
+            format!(
+                "GET /plan.json HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nHost: evil.example\r\n\r\n"
+            ),
         ];
         let replies = std::thread::scope(|s| {
             s.spawn(|| serve(&listener, &site, Some(requests.len())));
@@ -528,6 +563,11 @@ mod tests {
         );
         assert!(replies[2].starts_with("HTTP/1.1 405 "));
         assert!(replies[3].starts_with("HTTP/1.1 403 "));
+        for r in &replies[4..] {
+            assert!(r.starts_with("HTTP/1.1 403 "), "{r}");
+            assert!(r.contains("Host header"), "{r}");
+            assert!(!r.contains("htngtp-plan"), "{r}");
+        }
         fs::remove_dir_all(root).unwrap();
     }
 

@@ -77,12 +77,12 @@ impl Sexp {
 
 /// Cuts very long names in messages so one error stays one readable line.
 pub(crate) fn shorten(text: &str) -> String {
-    const MAX: usize = 60;
+    const MAX: usize = 80;
     if text.chars().count() <= MAX {
         text.to_string()
     } else {
         let cut: String = text.chars().take(MAX).collect();
-        format!("{cut}...")
+        format!("{cut}…")
     }
 }
 
@@ -141,12 +141,38 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
                 }
                 col = col.saturating_add(1);
             }
+            '\u{feff}' => {
+                return Err(ParseError::new(
+                    file,
+                    span,
+                    "a UTF-8 byte-order mark (U+FEFF); HDDL files must not start with one \
+                     (save the file as UTF-8 without BOM)",
+                ));
+            }
+            c if c.is_control() && c != '\t' && c != '\r' => {
+                return Err(ParseError::new(
+                    file,
+                    span,
+                    format!(
+                        "control character U+{:04X} is not allowed in HDDL \
+                         (expected text: names, `(`, `)`, spaces, tabs, newlines)",
+                        c as u32
+                    ),
+                ));
+            }
+            '"' => {
+                return Err(ParseError::new(
+                    file,
+                    span,
+                    "quoted strings are not HDDL (expected a name, a `?variable` or a `:keyword`)",
+                ));
+            }
             c if c.is_whitespace() => col = col.saturating_add(1),
             _ => {
                 let mut end = start + c.len_utf8();
                 let mut width: u32 = 1;
                 while let Some(&(i, c)) = chars.peek() {
-                    if is_delimiter(c) {
+                    if is_delimiter(c) || c == '"' || c == '\u{feff}' || c.is_control() {
                         break;
                     }
                     end = i + c.len_utf8();
@@ -208,6 +234,20 @@ mod tests {
         assert_eq!((e.line, e.col), (1, 1));
         let e = read("(a))", &file()).unwrap_err();
         assert_eq!((e.line, e.col), (1, 4));
+    }
+
+    #[test]
+    fn bom_control_bytes_and_quotes_are_refused_with_positions() {
+        let e = read("\u{feff}(a)", &file()).unwrap_err();
+        assert!(e.message.contains("byte-order mark"), "{}", e.message);
+        assert_eq!((e.line, e.col), (1, 1));
+        let e = read("(a\n b\0c)", &file()).unwrap_err();
+        assert!(e.message.contains("U+0000"), "{}", e.message);
+        assert_eq!((e.line, e.col), (2, 3));
+        let e = read("(a \"item\")", &file()).unwrap_err();
+        assert!(e.message.contains("quoted strings"), "{}", e.message);
+        assert_eq!((e.line, e.col), (1, 4));
+        assert!(read("(a\t b\r\n c)", &file()).is_ok());
     }
 
     #[test]
