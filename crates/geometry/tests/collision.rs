@@ -411,3 +411,44 @@ fn what_the_other_gripper_holds_blocks_the_moving_arm() {
     fast.set_fixed_joints(&q, &model.chain("right_arm").unwrap().dofs);
     assert!(hit(&fast) && !fast.is_config_free(&q));
 }
+
+/// Issue 11: a book carried in one hand passed through the book held in the other (fig4, give,
+/// transfer). The two held objects are tested against each other.
+#[test]
+fn the_two_held_objects_are_checked_against_each_other() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let q = model.default_configuration().into_vec();
+    let tool = |link: &str| model.link_pose(Pose::IDENTITY, &q, link).unwrap();
+    let (left, right) = (tool("l_gripper_tool_frame"), tool("r_gripper_tool_frame"));
+    // Both books 0.6 m in front of the midpoint of the grippers, 10 mm apart: overlapping.
+    let mid = (left.translation + right.translation) * 0.5 + Vector::X * 0.6;
+    let held = |link: &str, frame: Pose, dy: f32| {
+        let at = Pose::from_translation(mid + Vector::Y * dy);
+        HeldObject::new(
+            &model,
+            link,
+            SharedShape::cuboid(0.1, 0.07, 0.03),
+            link,
+            frame.inverse() * at,
+        )
+        .unwrap()
+    };
+    let checker = |dy: f32| {
+        let mut c = CollisionChecker::new(
+            m.clone(),
+            Arc::new(StaticObstacles::empty()),
+            Pose::IDENTITY,
+        );
+        c.set_held_object(Some(held("l_gripper_tool_frame", left, 0.0)));
+        c.add_other_held_object(held("r_gripper_tool_frame", right, dy));
+        c
+    };
+    let pair = |c: &CollisionChecker| {
+        c.collisions(&q)
+            .into_iter()
+            .any(|k| matches!(k, Contact::HeldObjects { .. }))
+    };
+    assert!(pair(&checker(0.01)), "{:?}", checker(0.01).collisions(&q));
+    assert!(!pair(&checker(0.2)), "{:?}", checker(0.2).collisions(&q));
+}

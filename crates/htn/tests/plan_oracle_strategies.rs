@@ -15,7 +15,7 @@ use std::path::Path;
 use htn::model::{Domain, Problem};
 use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, StreamId};
 use htn::plan::Plan;
-use htn::planner::{Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan};
+use htn::planner::{Limit, Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan};
 use htn::validate::validate;
 
 const SLOTS: [&str; 2] = ["p1", "p2"];
@@ -262,4 +262,54 @@ fn without_a_geometric_back_end_planning_names_the_first_gs_action() {
     let e = plan(&d, &p, &PlannerOptions::default(), None).unwrap_err();
     assert!(matches!(&e, PlanError::NoOracle { action, .. } if action == "makebkacc"));
     assert!(e.to_string().contains("make-accessible"), "{e}");
+}
+
+/// The outcome alone, with a fresh desk.
+fn outcome(problem: &str, strategy: Strategy, crowded: bool) -> Outcome {
+    let (d, p) = load(problem);
+    let mut desk = Desk {
+        crowded,
+        ..Desk::default()
+    };
+    let opts = PlannerOptions {
+        strategy,
+        ..PlannerOptions::default()
+    };
+    plan(&d, &p, &opts, Some(&mut desk)).unwrap().outcome
+}
+
+/// Issue 11: a strategy that stops because it used up its geometric alternatives has proven
+/// nothing, so it reports a limit (exit 2), never "no plan exists". Here a plan exists (the
+/// first book at the back), which only chronological backtracking finds.
+#[test]
+fn a_capped_strategy_that_fails_reports_a_limit_not_unsolvability() {
+    let capped = Outcome::LimitReached {
+        limit: Limit::GeometricAlternatives,
+    };
+    let p = "desk-both-heavy.hddl";
+    assert_eq!(outcome(p, Strategy::Symbolic, false), capped);
+    assert_eq!(outcome(p, Strategy::GeometricFirst { k: 0 }, false), capped);
+    assert!(matches!(
+        outcome(p, Strategy::Chronological, false),
+        Outcome::Found { .. }
+    ));
+}
+
+/// Only a complete search, which tried every geometric solution, may say no plan exists.
+#[test]
+fn only_the_complete_search_proves_unsolvability() {
+    let p = "desk-both-heavy.hddl";
+    assert_eq!(
+        outcome(p, Strategy::Chronological, true),
+        Outcome::Unsolvable
+    );
+    for s in [Strategy::Symbolic, Strategy::GeometricFirst { k: 3 }] {
+        assert_eq!(
+            outcome(p, s, true),
+            Outcome::LimitReached {
+                limit: Limit::GeometricAlternatives
+            },
+            "{s:?}"
+        );
+    }
 }
