@@ -30,16 +30,23 @@ const STRATEGIES: [&str; 3] = ["symbolic", "chronological", "geometric-first"];
 /// Plans one problem and returns the plan JSON's path, or `None` when the planner stopped
 /// without a plan. Symbolic backtracking may stop (exit 2, its cap on geometric solutions);
 /// the other strategies must solve every shipped problem.
-fn plan(dir: &Path, domain: &str, problem: &str, scene: &str, strategy: &str) -> Option<PathBuf> {
+fn plan(
+    dir: &Path,
+    domain: &str,
+    (problem, scene): (&str, &str),
+    strategy: &str,
+    seed: u32,
+) -> Option<PathBuf> {
     let lib = library();
-    let out = dir.join(format!("{domain}.{problem}.{strategy}.json"));
+    let out = dir.join(format!("{domain}.{problem}.{strategy}.{seed}.json"));
     let run = htngtp()
         .arg("plan")
         .arg(lib.join(format!("{domain}.hddl")))
         .arg(lib.join(format!("{problem}.hddl")))
         .arg("--scene")
         .arg(lib.join(scene))
-        .args(["--strategy", strategy, "--seed", "1", "--time-limit", "120"])
+        .args(["--strategy", strategy, "--seed", &seed.to_string()])
+        .args(["--time-limit", "120"])
         .arg("--json-out")
         .arg(&out)
         .output()
@@ -57,25 +64,32 @@ fn plan(dir: &Path, domain: &str, problem: &str, scene: &str, strategy: &str) ->
     Some(out)
 }
 
+/// `htngtp check`'s report on a plan JSON, or `None` when it is clean.
+fn faults(json: &Path) -> Option<String> {
+    let check = htngtp().arg("check").arg(json).output().expect("runs");
+    (check.status.code() != Some(0)).then(|| String::from_utf8_lossy(&check.stdout).into_owned())
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("htngtp-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
 #[test]
 fn every_shipped_plan_passes_the_independent_check() {
-    let dir = std::env::temp_dir().join(format!("htngtp-shipped-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = scratch("shipped");
     let mut checked = 0;
     let mut faulty = Vec::new();
     for domain in ["domain", "domain-compound"] {
-        for (problem, scene) in PROBLEMS {
+        for problem in PROBLEMS {
             for strategy in STRATEGIES {
-                let Some(json) = plan(&dir, domain, problem, scene, strategy) else {
+                let Some(json) = plan(&dir, domain, problem, strategy, 1) else {
                     continue;
                 };
-                let check = htngtp().arg("check").arg(&json).output().expect("runs");
                 checked += 1;
-                if check.status.code() != Some(0) {
-                    faulty.push(format!(
-                        "{domain} {problem} {strategy}:\n{}",
-                        String::from_utf8_lossy(&check.stdout)
-                    ));
+                if let Some(report) = faults(&json) {
+                    faulty.push(format!("{domain} {} {strategy}:\n{report}", problem.0));
                 }
             }
         }
@@ -83,4 +97,89 @@ fn every_shipped_plan_passes_the_independent_check() {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(checked >= 20, "only {checked} plans were checked");
     assert!(faulty.is_empty(), "{}", faulty.join("\n"));
+}
+
+/// The runs in which issue 11 found each kind of fault, on the code before its fixes: (domain,
+/// problem, strategy, seed, the fault found then). Each plan must now be clean.
+const ISSUE_11_FAULTS: [(&str, usize, &str, u32, &str); 6] = [
+    (
+        "domain",
+        3,
+        "chronological",
+        1,
+        "a finger through the desk on a return",
+    ),
+    (
+        "domain-compound",
+        1,
+        "symbolic",
+        3,
+        "a held book through the other held book",
+    ),
+    (
+        "domain",
+        4,
+        "geometric-first",
+        2,
+        "a held book through the desk; left arm vs right arm",
+    ),
+    (
+        "domain",
+        4,
+        "chronological",
+        3,
+        "a held book through the monitor",
+    ),
+    (
+        "domain",
+        4,
+        "geometric-first",
+        3,
+        "the held POS machine into the robot's base",
+    ),
+    (
+        "domain",
+        4,
+        "geometric-first",
+        1,
+        "the member's hand through the desk; the book in their thighs",
+    ),
+];
+
+#[test]
+fn the_runs_where_issue_11_found_faults_are_clean() {
+    let dir = scratch("issue11");
+    let mut faulty = Vec::new();
+    for (domain, problem, strategy, seed, fault) in ISSUE_11_FAULTS {
+        let json = plan(&dir, domain, PROBLEMS[problem], strategy, seed);
+        let json = json.unwrap_or_else(|| panic!("{domain} {problem} {strategy} {seed}: no plan"));
+        if let Some(report) = faults(&json) {
+            faulty.push(format!(
+                "{domain} {problem} {strategy} {seed} (was: {fault}):\n{report}"
+            ));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(faulty.is_empty(), "{}", faulty.join("\n"));
+}
+
+/// The demo's plan, as `htngtp demo` writes it (issue 11 found a finger through the desk on
+/// its third step's return).
+#[test]
+fn the_demo_plan_passes_the_independent_check() {
+    let dir = scratch("demo");
+    let run = htngtp()
+        .arg("demo")
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report = faults(&dir.join("plan.json"));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(report, None);
 }
