@@ -44,13 +44,19 @@ impl std::fmt::Display for GroundAtom {
     }
 }
 
+/// An opaque handle on one solution of the geometric back end. What it stands for (grasp,
+/// placement, trajectories, the world after it) stays with the back end that gave it out; the
+/// plan step keeps the handle, so the back end's caller can look the solution up, typed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct SolutionId(pub u64);
+
 /// One solution of a geometric task: the shared literals it makes true (`t+`) and false (`t-`),
-/// and an opaque payload (grasp, placement, trajectory...) kept with the plan step for output.
+/// and the back end's handle on it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GeoSolution {
     pub add: Vec<GroundAtom>,
     pub delete: Vec<GroundAtom>,
-    pub payload: serde_json::Value,
+    pub id: SolutionId,
 }
 
 /// A handle on a lazy stream of solutions, given out by [`GeometricOracle::open`].
@@ -77,8 +83,8 @@ pub trait GeometricOracle {
     /// Forgets a stream (no more solutions will be asked of it).
     fn close(&mut self, stream: StreamId);
 
-    /// Takes `solution`: the world becomes the world after it.
-    fn apply(&mut self, solution: &GeoSolution) -> Result<(), OracleError>;
+    /// Takes the solution `id` (one this oracle gave out): the world becomes the world after it.
+    fn apply(&mut self, id: SolutionId) -> Result<(), OracleError>;
 
     /// Undoes the most recent `apply` not yet undone.
     fn undo(&mut self);
@@ -91,9 +97,4 @@ pub trait GeometricOracle {
     /// The instant the search must end by (its time limit), so that a geometric call stops
     /// there too rather than run past it; called when a search starts. The default ignores it.
     fn set_deadline(&mut self, _deadline: Option<std::time::Instant>) {}
-
-    /// Statistics of the back end (per geometric task: calls, successes, time...), for reports.
-    fn stats(&self) -> serde_json::Value {
-        serde_json::Value::Null
-    }
 }

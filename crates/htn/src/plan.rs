@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 use serde::{Deserialize, Serialize};
 
 use crate::model::{Domain, Problem};
-use crate::oracle::GroundAtom;
+use crate::oracle::{GroundAtom, SolutionId};
 
 /// A primitive action of the plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -31,14 +31,14 @@ pub struct PlanAction {
 }
 
 /// The geometric solution a GS action took: the geometric task, the shared literals it made
-/// true and false, and the back end's payload (grasp, placement, trajectory...).
+/// true and false, and the back end's handle on the solution (grasp, placement, trajectory...).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GeoStep {
     pub task: String,
     pub args: Vec<String>,
     pub add: Vec<GroundAtom>,
     pub delete: Vec<GroundAtom>,
-    pub payload: serde_json::Value,
+    pub solution: SolutionId,
 }
 
 /// One decomposition: abstract task `id` was decomposed by `method` into `subtasks` (ids, in order).

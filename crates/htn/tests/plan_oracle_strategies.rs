@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use htn::model::{Domain, Problem};
-use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, StreamId};
+use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, SolutionId, StreamId};
 use htn::plan::Plan;
 use htn::planner::{Limit, Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan};
 use htn::validate::validate;
@@ -33,7 +33,8 @@ struct Desk {
     /// Per stream: the book, the world it was opened in, the next slot to try.
     streams: HashMap<u64, (String, Vec<Placement>, usize)>,
     next_id: u64,
-    solutions_given: usize,
+    /// Every solution given out, by its id: (book, slot).
+    solutions: Vec<Placement>,
     /// A crowded desk: any book on it blocks every further placement.
     crowded: bool,
     /// Nothing blocks, but a book on `p1` hides a book on `p2` (shared literal `visible`).
@@ -68,7 +69,6 @@ impl GeometricOracle for Desk {
             let slot = slots[*pos];
             *pos += 1;
             if !blocked && at(slot).is_none() {
-                self.solutions_given += 1;
                 let mut add = vec![GroundAtom::new("on-desk", &[book])];
                 let mut delete = vec![];
                 if self.hiding {
@@ -79,10 +79,11 @@ impl GeometricOracle for Desk {
                         delete.push(GroundAtom::new("visible", &[other]));
                     }
                 }
+                self.solutions.push((book.clone(), slot.to_string()));
                 return Ok(Some(GeoSolution {
                     add,
                     delete,
-                    payload: serde_json::json!({ "book": book, "slot": slot }),
+                    id: SolutionId(self.solutions.len() as u64 - 1),
                 }));
             }
         }
@@ -91,11 +92,10 @@ impl GeometricOracle for Desk {
     fn close(&mut self, s: StreamId) {
         self.streams.remove(&s.0);
     }
-    fn apply(&mut self, sol: &GeoSolution) -> Result<(), OracleError> {
+    fn apply(&mut self, id: SolutionId) -> Result<(), OracleError> {
+        let placed = self.solutions[id.0 as usize].clone();
         self.saved.push(self.world.clone());
-        let book = sol.payload["book"].as_str().unwrap().to_string();
-        let slot = sol.payload["slot"].as_str().unwrap().to_string();
-        self.world.push((book, slot));
+        self.world.push(placed);
         Ok(())
     }
     fn undo(&mut self) {
@@ -147,31 +147,24 @@ fn run_on(problem: &str, strategy: Strategy, crowded: bool) -> (Vec<String>, Sea
     };
     validate(&d, &p, &plan, &[]).unwrap();
     // The world the desk is left in is the plan's: one placement per GS step, in order.
-    let placed: Vec<(String, String)> = plan
+    let placed: Vec<Placement> = plan
         .actions
         .iter()
         .filter_map(|a| a.geometric.as_ref())
-        .map(|g| {
-            (
-                g.payload["book"].as_str().unwrap().to_string(),
-                g.payload["slot"].as_str().unwrap().to_string(),
-            )
-        })
+        .map(|g| desk.solutions[g.solution.0 as usize].clone())
         .collect();
     assert_eq!(desk.world, placed);
-    (steps(&plan), r.stats)
+    (steps(&plan, &desk), r.stats)
 }
 
-fn steps(plan: &Plan) -> Vec<String> {
+fn steps(plan: &Plan, desk: &Desk) -> Vec<String> {
     plan.actions
         .iter()
         .map(|a| match &a.geometric {
-            Some(g) => format!(
-                "{} {}@{}",
-                a.name,
-                a.args[0],
-                g.payload["slot"].as_str().unwrap()
-            ),
+            Some(g) => {
+                let slot = &desk.solutions[g.solution.0 as usize].1;
+                format!("{} {}@{slot}", a.name, a.args[0])
+            }
             None => format!("{} {}", a.name, a.args[0]),
         })
         .collect()

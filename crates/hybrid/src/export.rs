@@ -269,10 +269,9 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
             if let Some(g) = &a.geometric {
                 added = g.add.iter().map(atom_json).collect();
                 deleted = g.delete.iter().map(atom_json).collect();
-                let summary: Option<SolutionSummary> =
-                    serde_json::from_value(g.payload["summary"].clone()).ok();
+                let summary = run.oracle.solution_summary(g.solution);
                 let mut trajectories = Vec::new();
-                if let Some(s) = &summary {
+                if let Some(s) = summary {
                     for t in &s.trajectories {
                         let arm = robot
                             .as_ref()
@@ -283,7 +282,7 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
                         world = after;
                     }
                 }
-                if let Some(after) = run.oracle.solution_world(&g.payload) {
+                if let Some(after) = run.oracle.solution_world(g.solution) {
                     // The solution's world, with the grippers as the trajectories left them.
                     let fingers: Vec<(geometry::scene::AgentId, usize, f32)> = robot
                         .iter()
@@ -311,8 +310,8 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
                 gtp = json!({
                     "task": g.task,
                     "args": g.args,
-                    "summary": summary.as_ref().map(summary_line),
-                    "stats": summary.as_ref().map(|s| json!({
+                    "summary": summary.map(summary_line),
+                    "stats": summary.map(|s| json!({
                         "time_ms": s.stats.time_s * 1e3,
                         "points": s.stats.points,
                         "grasps": s.stats.grasps,

@@ -18,8 +18,9 @@ use std::time::Instant;
 use geometry::facts::{FactParams, shared_literals};
 use geometry::world::World;
 use gtp::planner::{CallOptions, Planner, Solution, SolutionStream};
+use gtp::solution::SolutionSummary;
 use gtp::stats::Stats;
-use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, StreamId};
+use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, SolutionId, StreamId};
 use serde::Serialize;
 
 /// Settings of the oracle.
@@ -76,6 +77,13 @@ struct Frame {
     fingerprint: u64,
 }
 
+/// A solution given out to the HTN search: the world after it, with its literals, and what
+/// the GTP did (grasp, placement, trajectories).
+struct Given {
+    frame: Frame,
+    summary: SolutionSummary,
+}
+
 /// An open solution stream of one GTP task.
 struct Stream {
     task: String,
@@ -100,8 +108,8 @@ pub struct GtpOracle {
     /// Names the HTN problem knows (objects and constants); literals over others are dropped.
     known: HashSet<String>,
     stack: Vec<Frame>,
-    /// Every solution handed out, by the id in its payload; `apply` pushes its frame.
-    solutions: Vec<Frame>,
+    /// Every solution given out, indexed by its [`SolutionId`]; `apply` pushes its frame.
+    solutions: Vec<Given>,
     streams: HashMap<u64, Stream>,
     next_stream: u64,
     stats: HashMap<String, TaskStats>,
@@ -146,10 +154,18 @@ impl GtpOracle {
         &self.stack[self.stack.len() - 1].world
     }
 
-    /// The world a payload's solution led to (`None` for a payload of another oracle).
-    pub fn solution_world(&self, payload: &serde_json::Value) -> Option<&World> {
-        let id = payload.get("solution")?.as_u64()? as usize;
-        self.solutions.get(id).map(|f| &f.world)
+    /// The world solution `id` led to (`None` for an id this oracle did not give out).
+    pub fn solution_world(&self, id: SolutionId) -> Option<&World> {
+        self.given(id).map(|g| &g.frame.world)
+    }
+
+    /// What the GTP did in solution `id`: grasp, placement, visibility, trajectories.
+    pub fn solution_summary(&self, id: SolutionId) -> Option<&SolutionSummary> {
+        self.given(id).map(|g| &g.summary)
+    }
+
+    fn given(&self, id: SolutionId) -> Option<&Given> {
+        self.solutions.get(usize::try_from(id.0).ok()?)
     }
 
     /// The geometric task planner answering the predicates.
@@ -293,14 +309,12 @@ impl GeometricOracle for GtpOracle {
                 let before = self.current_facts();
                 let add = frame.facts.difference(before).cloned().collect();
                 let delete = before.difference(&frame.facts).cloned().collect();
-                let id = self.solutions.len();
-                let summary = serde_json::to_value(&sol.summary).unwrap_or(serde_json::Value::Null);
-                self.solutions.push(frame);
-                Some(GeoSolution {
-                    add,
-                    delete,
-                    payload: serde_json::json!({ "solution": id, "summary": summary }),
-                })
+                let id = SolutionId(self.solutions.len() as u64);
+                self.solutions.push(Given {
+                    frame,
+                    summary: sol.summary,
+                });
+                Some(GeoSolution { add, delete, id })
             }
         };
         let s = self.stats.entry(task.clone()).or_default();
@@ -346,14 +360,11 @@ impl GeometricOracle for GtpOracle {
         self.streams.remove(&stream.0);
     }
 
-    fn apply(&mut self, solution: &GeoSolution) -> Result<(), OracleError> {
-        let frame = solution
-            .payload
-            .get("solution")
-            .and_then(|v| v.as_u64())
-            .and_then(|id| self.solutions.get(id as usize))
-            .cloned()
-            .ok_or_else(|| OracleError("a solution this oracle did not produce".into()))?;
+    fn apply(&mut self, id: SolutionId) -> Result<(), OracleError> {
+        let frame = self
+            .given(id)
+            .map(|g| g.frame.clone())
+            .ok_or_else(|| OracleError(format!("solution {} was not given out here", id.0)))?;
         self.stack.push(frame);
         Ok(())
     }
@@ -370,11 +381,6 @@ impl GeometricOracle for GtpOracle {
 
     fn world_fingerprint(&self) -> u64 {
         self.stack[self.stack.len() - 1].fingerprint
-    }
-
-    fn stats(&self) -> serde_json::Value {
-        let tasks: std::collections::BTreeMap<_, _> = self.stats.iter().collect();
-        serde_json::to_value(tasks).unwrap_or_default()
     }
 }
 

@@ -49,7 +49,7 @@ impl Run {
                 .iter()
                 .rev()
                 .filter_map(|a| a.geometric.as_ref())
-                .find_map(|g| self.oracle.solution_world(&g.payload))
+                .find_map(|g| self.oracle.solution_world(g.solution))
                 .unwrap_or(&self.initial),
             _ => &self.initial,
         }

@@ -83,19 +83,20 @@ fn assert_trajectories_recheck(run: &Run) {
     let mut checked = 0;
     for a in &plan(run).actions {
         let Some(g) = &a.geometric else { continue };
-        let summary: gtp::solution::SolutionSummary =
-            serde_json::from_value(g.payload["summary"].clone())
-                .unwrap_or_else(|e| panic!("{}: summary does not parse: {e}", a.name));
+        let summary = run
+            .oracle
+            .solution_summary(g.solution)
+            .unwrap_or_else(|| panic!("{}: no summary", a.name));
         assert!(
             !summary.trajectories.is_empty(),
             "{}: no trajectory",
             a.name
         );
-        gtp::verify::recheck_trajectories(planner, before, &summary, res)
+        gtp::verify::recheck_trajectories(planner, before, summary, res)
             .unwrap_or_else(|e| panic!("{} {:?}: {e}", a.name, a.args));
         before = run
             .oracle
-            .solution_world(&g.payload)
+            .solution_world(g.solution)
             .expect("solution world");
         checked += 1;
     }
@@ -403,7 +404,7 @@ fn fig4_is_solved_by_geometric_backtracking_alone() {
         .unwrap();
     let after_grey = r
         .oracle
-        .solution_world(&grey.geometric.as_ref().unwrap().payload)
+        .solution_world(grey.geometric.as_ref().unwrap().solution)
         .unwrap()
         .clone();
     let names = [

@@ -8,6 +8,7 @@ use anyhow::Context;
 use geometry::render::{Camera, agent_camera, render};
 use geometry::scene::AgentKind;
 use geometry::world::World;
+use gtp::solution::SolutionSummary;
 use htn::planner::{Outcome, PlannerOptions};
 use hybrid::{OracleConfig, Run, RunOptions};
 
@@ -106,35 +107,9 @@ pub fn print_report(run: &Run) {
             for (i, a) in plan.actions.iter().enumerate() {
                 println!("  {i:>2}. {} {}", a.name, a.args.join(" "));
                 if let Some(g) = &a.geometric {
-                    let s = &g.payload["summary"];
                     let mut parts = vec![format!("{}({})", g.task, g.args.join(", "))];
-                    if let Some(x) = s["grasp"].as_object() {
-                        parts.push(format!(
-                            "grasp {} on {}",
-                            x.get("id").map(|v| v.to_string()).unwrap_or_default(),
-                            x.get("arm").and_then(|v| v.as_str()).unwrap_or("?")
-                        ));
-                    }
-                    if let Some(p) = s["placement"].as_object() {
-                        let pt = &p["point"];
-                        parts.push(format!(
-                            "placed on {} at ({:.2}, {:.2}, {:.2})",
-                            p.get("support")
-                                .and_then(|v| v.as_str())
-                                .unwrap_or("(held)"),
-                            pt[0].as_f64().unwrap_or(0.0),
-                            pt[1].as_f64().unwrap_or(0.0),
-                            pt[2].as_f64().unwrap_or(0.0)
-                        ));
-                    }
-                    if let Some(v) = s["visibility"].as_f64() {
-                        parts.push(format!("visibility {:.0}%", v * 100.0));
-                    }
-                    let len: f64 = s["trajectories"]
-                        .as_array()
-                        .map(|t| t.iter().filter_map(|t| t["length"].as_f64()).sum())
-                        .unwrap_or(0.0);
-                    parts.push(format!("trajectory length {len:.2}"));
+                    let summary = run.oracle.solution_summary(g.solution);
+                    parts.extend(summary.map(solution_parts).unwrap_or_default());
                     println!("      GTP: {}", parts.join("; "));
                     let fmt = |v: &[htn::oracle::GroundAtom]| {
                         v.iter()
@@ -181,6 +156,28 @@ pub fn print_report(run: &Run) {
     }
 }
 
+/// A GTP solution in words: grasp, placement, visibility and trajectory length.
+fn solution_parts(s: &SolutionSummary) -> Vec<String> {
+    let mut parts = Vec::new();
+    if let Some(g) = &s.grasp {
+        let id = g.id.map_or_else(|| "null".to_string(), |i| i.to_string());
+        parts.push(format!("grasp {id} on {}", g.arm));
+    }
+    if let Some(p) = &s.placement {
+        let [x, y, z] = p.point;
+        parts.push(format!(
+            "placed on {} at ({x:.2}, {y:.2}, {z:.2})",
+            p.support.as_deref().unwrap_or("(held)")
+        ));
+    }
+    if let Some(v) = s.visibility {
+        parts.push(format!("visibility {:.0}%", v * 100.0));
+    }
+    let len: f32 = s.trajectories.iter().map(|t| t.length).sum();
+    parts.push(format!("trajectory length {len:.2}"));
+    parts
+}
+
 /// Pictures of the initial world and of the world after each GS action, from the first human's
 /// eyes and from above. Returns how many were written.
 pub fn write_pictures(run: &Run, dir: &Path) -> anyhow::Result<usize> {
@@ -191,7 +188,7 @@ pub fn write_pictures(run: &Run, dir: &Path) -> anyhow::Result<usize> {
             if let Some(w) = a
                 .geometric
                 .as_ref()
-                .and_then(|g| run.oracle.solution_world(&g.payload))
+                .and_then(|g| run.oracle.solution_world(g.solution))
             {
                 worlds.push((format!("{:02}-{}", i + 1, a.name), w));
             }

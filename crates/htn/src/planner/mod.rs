@@ -186,9 +186,6 @@ pub struct SearchStats {
     pub time_s: f64,
     /// Peak resident memory of the process seen during the search, in KiB (0 if unknown).
     pub peak_memory_kb: u64,
-    /// The geometric back end's own statistics, when one is plugged in.
-    #[serde(default, skip_serializing_if = "serde_json::Value::is_null")]
-    pub geometric: serde_json::Value,
 }
 
 /// The result of a search: the outcome and how it went.

@@ -459,9 +459,6 @@ impl<'a, 'o> Search<'a, 'o> {
         };
         self.stats.time_s = self.start.elapsed().as_secs_f64();
         self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
-        if let Some(o) = self.oracle.as_deref() {
-            self.stats.geometric = o.stats();
-        }
         Ok(SearchResult {
             outcome,
             stats: self.stats,
@@ -1395,7 +1392,7 @@ impl<'a, 'o> Search<'a, 'o> {
             .oracle
             .as_deref_mut()
             .expect("GS actions need an oracle");
-        oracle.apply(sol)?;
+        oracle.apply(sol.id)?;
         g.applied = true;
         let (gt, gargs) = act.evaluable.as_ref().expect("a GS action");
         let geo = GeoStep {
@@ -1409,7 +1406,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 .collect(),
             add: sol.add.clone(),
             delete: sol.delete.clone(),
-            payload: sol.payload.clone(),
+            solution: sol.id,
         };
         self.steps.push(Step {
             occ: g.occ,
