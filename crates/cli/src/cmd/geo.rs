@@ -9,6 +9,7 @@ use geometry::render::{Camera, agent_camera, render};
 use geometry::scene::AgentKind;
 use geometry::world::World;
 use gtp::solution::SolutionSummary;
+use htn::model::{Domain, Problem};
 use htn::planner::{Outcome, PlannerOptions};
 use hybrid::{OracleConfig, Run, RunOptions};
 
@@ -27,18 +28,16 @@ pub struct Outputs {
 
 /// Plans `problem` of `domain` in `scene` and reports; returns the exit code.
 pub fn run_plan(
-    domain_path: &Path,
-    problem_path: &Path,
+    domain: &Domain,
+    problem: &Problem,
     scene: &Path,
     planner: PlannerOptions,
     oracle: OracleConfig,
     out: &Outputs,
 ) -> anyhow::Result<u8> {
     let began = std::time::Instant::now();
-    let domain = htn::load_domain(domain_path)?;
-    let problem = htn::load_problem(problem_path, &domain)?;
     let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
-    // The time limit covers reading the files: the planner gets what is left.
+    // The time limit covers reading the scene: the planner gets what is left.
     let mut planner = planner;
     planner.limits.time = planner
         .limits
@@ -46,8 +45,8 @@ pub fn run_plan(
         .map(|t| t.saturating_sub(began.elapsed()));
     let options = RunOptions { planner, oracle };
     let run = hybrid::plan(
-        &domain,
-        &problem,
+        domain,
+        problem,
         world,
         std::sync::Arc::new(gtp::planner::Planner::new()),
         &options,

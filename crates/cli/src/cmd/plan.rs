@@ -149,14 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json_file: args.json_out.clone(),
             png_dir: args.png.clone(),
         };
-        return crate::cmd::geo::run_plan(
-            &args.domain,
-            &args.problem,
-            scene,
-            options,
-            oracle,
-            &out,
-        );
+        return crate::cmd::geo::run_plan(&domain, &problem, scene, options, oracle, &out);
     }
     let result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;
