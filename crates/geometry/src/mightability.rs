@@ -32,7 +32,7 @@ use rayon::prelude::*;
 
 use crate::effort::{JointRange, MAX_EFFORT, stances};
 use crate::scene::{AgentId, ObjectId};
-use crate::world::{BodyOwner, World, WorldModel};
+use crate::world::{BodyOwner, Precision, World, WorldModel};
 
 /// A cell no effort level reaches.
 pub const NONE: u8 = u8::MAX;
@@ -731,38 +731,10 @@ fn agent_maps(
 type CacheEntry = (Weak<WorldModel>, u64, MightabilityParams, Arc<Mightability>);
 static CACHE: Mutex<Vec<CacheEntry>> = Mutex::new(Vec::new());
 
-/// A fingerprint of a world state (object poses, attachments, agent configurations).
-fn fingerprint(world: &World) -> u64 {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    for id in world.object_ids() {
-        let p = world.object_pose(id);
-        for v in [p.translation.x, p.translation.y, p.translation.z] {
-            v.to_bits().hash(&mut h);
-        }
-        for v in p.rotation.to_array() {
-            v.to_bits().hash(&mut h);
-        }
-    }
-    for a in world.agent_ids() {
-        let s = world.agent_state(a);
-        for v in
-            s.q.iter()
-                .chain([s.base.translation.x, s.base.translation.y].iter())
-        {
-            v.to_bits().hash(&mut h);
-        }
-        for v in s.base.rotation.to_array() {
-            v.to_bits().hash(&mut h);
-        }
-    }
-    h.finish()
-}
-
 /// The maps of this world state, computed on first use and kept in memory (per scene, per state,
 /// per parameters; entries of dropped scenes are discarded).
 pub fn cached(world: &World, params: &MightabilityParams) -> Arc<Mightability> {
-    let fp = fingerprint(world);
+    let fp = world.fingerprint(Precision::Exact);
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
         cache.retain(|(w, ..)| w.strong_count() > 0);

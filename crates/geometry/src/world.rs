@@ -153,6 +153,15 @@ fn find_link(model: &AgentModel, names: &[&str]) -> Option<usize> {
     names.iter().find_map(|n| model.link_id(n).ok())
 }
 
+/// How closely [`World::fingerprint`] tells worlds apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// Every bit of every value.
+    Exact,
+    /// Positions to the millimetre (quaternion components and joint values to 0.001).
+    Millimetre,
+}
+
 impl World {
     /// Loads a scene file and its agents' URDF models.
     pub fn load(path: impl AsRef<Path>) -> Result<World, SceneError> {
@@ -441,6 +450,49 @@ impl World {
     /// The attachment of an object, if it is held.
     pub fn attachment(&self, id: ObjectId) -> Option<Attachment> {
         self.attachments[id.0]
+    }
+
+    /// A hash of the world's state: every object's pose and attachment, every agent's base
+    /// pose and joint values. The one fingerprint of a world: the HTN search tells worlds
+    /// apart by it to the millimetre, the mightability maps are cached by it exactly.
+    pub fn fingerprint(&self, precision: Precision) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        let key = |v: f32| match precision {
+            Precision::Exact => i64::from(v.to_bits()),
+            Precision::Millimetre => (v * 1000.0).round() as i64,
+        };
+        for id in self.object_ids() {
+            let p = self.object_pose(id);
+            let r = p.rotation;
+            for v in [
+                p.translation.x,
+                p.translation.y,
+                p.translation.z,
+                r.x,
+                r.y,
+                r.z,
+                r.w,
+            ] {
+                key(v).hash(&mut h);
+            }
+            self.attachment(id)
+                .map(|a| (a.agent.0, a.link))
+                .hash(&mut h);
+        }
+        for id in self.agent_ids() {
+            let s = self.agent_state(id);
+            let (t, r) = (s.base.translation, s.base.rotation);
+            // A base turns about z only; the tilt parts count where every bit does. (The
+            // millimetre hash seeds the GTP's calls: changing it changes the plans.)
+            if precision == Precision::Exact {
+                [r.x, r.y].map(key).hash(&mut h);
+            }
+            for v in [t.x, t.y, r.z, r.w].iter().chain(&s.q) {
+                key(*v).hash(&mut h);
+            }
+        }
+        h.finish()
     }
 
     // ---- agents --------------------------------------------------------------------------

@@ -16,7 +16,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use geometry::facts::{FactParams, shared_literals};
-use geometry::world::World;
+use geometry::world::{Precision, World};
 use gtp::planner::{CallOptions, Planner, Solution, SolutionStream};
 use gtp::solution::SolutionSummary;
 use gtp::stats::Stats;
@@ -213,7 +213,8 @@ impl GtpOracle {
 
     fn frame(&self, world: World) -> Frame {
         let facts = Arc::new(self.literals(&world));
-        let fingerprint = fingerprint(&world);
+        // Two worlds that differ in geometry only are told apart by the HTN search.
+        let fingerprint = world.fingerprint(Precision::Millimetre);
         Frame {
             world,
             facts,
@@ -382,41 +383,6 @@ impl GeometricOracle for GtpOracle {
     fn world_fingerprint(&self) -> u64 {
         self.stack[self.stack.len() - 1].fingerprint
     }
-}
-
-/// A hash of every object's pose, attachment and every agent's configuration, to the
-/// millimetre: two worlds that differ in geometry only are told apart by the HTN search.
-pub fn fingerprint(world: &World) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    let q = |v: f32| (v * 1000.0).round() as i64;
-    for id in world.object_ids() {
-        let p = world.object_pose(id);
-        for v in [p.translation.x, p.translation.y, p.translation.z] {
-            q(v).hash(&mut h);
-        }
-        for v in [p.rotation.x, p.rotation.y, p.rotation.z, p.rotation.w] {
-            q(v).hash(&mut h);
-        }
-        world
-            .attachment(id)
-            .map(|a| (a.agent.0, a.link))
-            .hash(&mut h);
-    }
-    for id in world.agent_ids() {
-        let s = world.agent_state(id);
-        for v in [
-            s.base.translation.x,
-            s.base.translation.y,
-            s.base.rotation.z,
-            s.base.rotation.w,
-        ] {
-            q(v).hash(&mut h);
-        }
-        for v in &s.q {
-            q(*v).hash(&mut h);
-        }
-    }
-    h.finish()
 }
 
 fn diff_stats(after: &Stats, before: &Stats) -> Stats {
