@@ -35,7 +35,7 @@ type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// The first fault found in a plan.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("invalid plan: {0}")]
+#[error("invalid plan: {}", crate::text::clip(.0))]
 pub struct Fault(pub String);
 
 type Key = Vec<String>;

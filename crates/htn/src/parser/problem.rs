@@ -95,12 +95,7 @@ pub fn parse_problem(
         .map(|s| s.1)
         .unwrap_or_default()
     {
-        if !r.as_atom().is_some_and(|a| a.starts_with(':')) {
-            return Err(ctx.err(
-                r.span(),
-                format!("expected a requirement `:name`, found {}", r.describe()),
-            ));
-        }
+        super::domain::requirement(r, ctx.file)?;
     }
 
     // Objects join the domain's constants.
@@ -178,7 +173,10 @@ fn init(ctx: &Ctx, items: &[Sexp]) -> Result<(Vec<InitFact>, Vec<InitValue>)> {
             })
             .collect()
     };
-    for item in items {
+    for (k, item) in items.iter().enumerate() {
+        if k % 4096 == 4095 {
+            ctx.within_budget(item.span(), "reading the initial state")?;
+        }
         let parts = ctx.list(item, "a fact `(p ...)` or a value `(= (f ...) n)`")?;
         let Some(first) = parts.first() else {
             return Err(ctx.err(item.span(), "expected a fact `(p ...)`, found `()`"));
