@@ -25,17 +25,17 @@ pub struct Outputs {
 }
 
 /// Plans `problem` of `domain` in `scene` and reports; returns the exit code.
+/// `domain` and `problem` are read; `began` is when the command started reading.
 pub fn run_plan(
-    domain_path: &Path,
-    problem_path: &Path,
+    domain: &htn::model::Domain,
+    problem: &htn::model::Problem,
+    began: std::time::Instant,
     scene: &Path,
     planner: PlannerOptions,
     oracle: OracleConfig,
     out: &Outputs,
 ) -> anyhow::Result<u8> {
-    let began = std::time::Instant::now();
-    let domain = htn::load_domain(domain_path)?;
-    let problem = htn::load_problem(problem_path, &domain)?;
+    let (domain, problem) = (domain, problem);
     let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
     // The time limit covers reading the files: the planner gets what is left.
     let mut planner = planner;
@@ -45,8 +45,8 @@ pub fn run_plan(
         .map(|t| t.saturating_sub(began.elapsed()));
     let options = RunOptions { planner, oracle };
     let run = hybrid::plan(
-        &domain,
-        &problem,
+        domain,
+        problem,
         world,
         std::sync::Arc::new(gtp::planner::Planner::new()),
         &options,

@@ -119,7 +119,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let scene = args.scene.as_deref();
     crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
     let began = std::time::Instant::now();
-    let domain = htn::load_domain(&args.domain)?;
+    crate::input::set_budget(began, args.time_limit, args.memory_limit);
+    let domain = crate::input::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let options = PlannerOptions {
         limits: Limits {
@@ -149,14 +150,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json_file: args.json_out.clone(),
             png_dir: args.png.clone(),
         };
-        return crate::cmd::geo::run_plan(
-            &args.domain,
-            &args.problem,
-            scene,
-            options,
-            oracle,
-            &out,
-        );
+        return crate::cmd::geo::run_plan(&domain, &problem, began, scene, options, oracle, &out);
     }
     let result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;

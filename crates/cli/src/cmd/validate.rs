@@ -36,7 +36,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
     crate::input::check_files([&*args.domain, &*args.problem, &*args.plan])?;
-    let domain = htn::load_domain(&args.domain)?;
+    let domain = crate::input::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let text = std::fs::read_to_string(&args.plan)
         .with_context(|| format!("cannot read plan file {}", args.plan.display()))?;
