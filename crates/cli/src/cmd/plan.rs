@@ -155,7 +155,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;
     if let Outcome::Found { plan } = &result.outcome {
-        htn::validate::validate(&domain, &problem, plan, &[]).context(
+        let checked = htn::validate::validate(&domain, &problem, plan, &[]);
+        if let (Err(e), Some(_)) = (&checked, htn::budget::tripped()) {
+            // The limits cover the validation too: a plan not validated is not printed.
+            eprintln!("{}", e.0);
+            return Ok(exit::LIMIT);
+        }
+        checked.context(
             "BUG: the planner returned a plan that the validator rejects; please report it",
         )?;
         plan_text = Some(plan.to_competition_format());

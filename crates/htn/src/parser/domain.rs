@@ -11,7 +11,7 @@ use crate::model::{
 use super::context::{Ctx, Result, Scope, Tables};
 use super::error::ParseError;
 use super::formula::Evaluable;
-use super::sexpr::{Sexp, read, shorten};
+use super::sexpr::{Sexp, Tree, read, shorten};
 use super::types::TypeTable;
 
 /// The items of `(define (KIND NAME) ...)`, the name and its span, from the top level of a file.
@@ -109,8 +109,8 @@ pub(crate) fn section<'s>(
 
 /// Parses a domain. See [`super`] for the accepted language.
 pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domain, ParseError> {
-    let top = read(text, &source)?;
-    let (items, name, _) = define(&top, "domain", &source)?;
+    let top = Tree(read(text, &source)?);
+    let (items, name, _) = define(&top.0, "domain", &source)?;
     let file = &source;
 
     let mut domain = Domain {

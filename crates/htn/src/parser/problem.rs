@@ -11,7 +11,7 @@ use super::context::{Ctx, Result, Scope, Tables, is_name, looks_numeric, parse_n
 use super::domain::{define, section};
 use super::error::ParseError;
 use super::formula::Evaluable;
-use super::sexpr::{Sexp, read, shorten};
+use super::sexpr::{Sexp, Tree, read, shorten};
 
 /// Parses a problem of `domain`.
 ///
@@ -23,8 +23,8 @@ pub fn parse_problem(
     source: SourceName,
     domain: &Domain,
 ) -> std::result::Result<Problem, ParseError> {
-    let top = read(text, &source)?;
-    let (items, name, _) = define(&top, "problem", &source)?;
+    let top = Tree(read(text, &source)?);
+    let (items, name, _) = define(&top.0, "problem", &source)?;
     let file = &source;
     let action_sigs: Vec<Signature> = domain
         .actions

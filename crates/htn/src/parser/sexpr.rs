@@ -132,6 +132,19 @@ enum Unclosed {
     Indent { outer: Span, inner: Span },
 }
 
+/// The s-expressions of a file while it is parsed. Dropped normally, unless a limit of the
+/// process's budget stopped the parsing: then the process is about to end, and freeing
+/// millions of nodes one by one would take longer than the limit's slack.
+pub(crate) struct Tree(pub Vec<Sexp>);
+
+impl Drop for Tree {
+    fn drop(&mut self) {
+        if crate::budget::tripped().is_some() {
+            std::mem::forget(std::mem::take(&mut self.0));
+        }
+    }
+}
+
 /// Reads all top-level s-expressions of `text`.
 pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseError> {
     let mut top: Vec<Sexp> = Vec::new();
@@ -152,6 +165,9 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
         if steps % 4096 == 0
             && let Some(limit) = crate::budget::check()
         {
+            // The process stops: what was read is left to it, not freed node by node.
+            std::mem::forget(top);
+            std::mem::forget(stack);
             return Err(ParseError::new(
                 file,
                 span,

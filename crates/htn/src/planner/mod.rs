@@ -232,20 +232,22 @@ pub fn plan<'o>(
         options.limits.time.map(|t| began + t),
         options.limits.memory_mb,
     );
+    let stopped = |limit: Limit| SearchResult {
+        outcome: Outcome::LimitReached { limit },
+        stats: SearchStats {
+            time_s: began.elapsed().as_secs_f64(),
+            peak_memory_kb: current_rss_kb(),
+            ..SearchStats::default()
+        },
+    };
     let compiled = match compile::compile(domain, problem, &mut watch) {
         Ok(c) => c,
-        Err(PlanError::Stopped(limit)) => {
-            return Ok(SearchResult {
-                outcome: Outcome::LimitReached { limit },
-                stats: SearchStats {
-                    time_s: began.elapsed().as_secs_f64(),
-                    peak_memory_kb: current_rss_kb(),
-                    ..SearchStats::default()
-                },
-            });
-        }
+        Err(PlanError::Stopped(limit)) => return Ok(stopped(limit)),
         Err(e) => return Err(e),
     };
+    if let Some(limit) = watch.check() {
+        return Ok(stopped(limit));
+    }
     if oracle.is_none()
         && let Some(a) = compiled.actions.iter().find(|a| a.evaluable.is_some())
     {
