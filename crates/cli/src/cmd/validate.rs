@@ -51,8 +51,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         serde_json::from_value::<htn::plan::Plan>(p.clone())
             .with_context(|| format!("{}: not a plan in JSON", args.plan.display()))?
     } else {
-        htn::plan::Plan::parse(&text)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", args.plan.display()))?
+        htn::plan::Plan::parse(&text).map_err(|e| {
+            // `FILE:LINE:COL: message`, or `FILE: message` for the plan as a whole.
+            let sep = if e.line > 0 { ":" } else { ": " };
+            anyhow::anyhow!("{}{sep}{e}", args.plan.display())
+        })?
     };
     let names = if args.lenient {
         htn::validate::Names::CaseInsensitive
