@@ -343,6 +343,32 @@ fn bench_hddl_interrupted_keeps_its_rows_and_leaves_no_child() {
     assert!(rows.contains("\na-tiny,p01.hddl,found,"), "{rows}");
 }
 
+/// Runs the binary and measures its peak resident memory (VmHWM of /proc, polled every 5 ms
+/// until it ends), in KiB.
+fn run_measuring_memory(args: &[&str]) -> (Output, u64) {
+    let mut child = Command::new(EXE)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let status = format!("/proc/{}/status", child.id());
+    let mut measured_kb = 0u64;
+    while child.try_wait().unwrap().is_none() {
+        if let Ok(text) = std::fs::read_to_string(&status)
+            && let Some(kb) = text
+                .lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        {
+            measured_kb = measured_kb.max(kb);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    (child.wait_with_output().unwrap(), measured_kb)
+}
+
 /// An endless search (a count that only grows) stops at the memory limit, says so, and its
 /// peak resident memory stays within 50 MiB of the limit.
 #[test]
@@ -352,9 +378,13 @@ fn the_memory_limit_stops_an_endless_search_near_the_limit() {
         htn_tests.join("counter-domain.hddl"),
         htn_tests.join("counter.hddl"),
     );
-    let o = run(
-        &["plan", s(&d), s(&p), "--memory-limit", "120", "--json"],
-        Stdio::piped(),
+    // The test measures the child's peak resident memory itself besides what it reports.
+    let (o, measured_kb) =
+        run_measuring_memory(&["plan", s(&d), s(&p), "--memory-limit", "120", "--json"]);
+    assert!(
+        measured_kb / 1024 <= 120 + 50,
+        "peak {} MiB measured",
+        measured_kb / 1024
     );
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -586,6 +616,25 @@ fn limits_stop_reading_and_parsing_with_exit_2() {
         "{}",
         stderr(&o)
     );
+    // A problem whose reading alone would take far more memory than allowed stops near the
+    // limit (measured here).
+    let objects: String = (0..1_000_000).map(|i| format!("o{i} ")).collect();
+    let huge = dir.join("huge.hddl");
+    std::fs::write(
+        &huge,
+        format!(
+            "(define (problem p) (:domain tiny) (:objects {objects}) (:htn :parameters () :ordered-subtasks (and (go))) (:init))"
+        ),
+    )
+    .unwrap();
+    let (o, peak_kb) = run_measuring_memory(&["plan", s(&d), s(&huge), "--memory-limit", "40"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("stopped: memory limit reached while"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(peak_kb / 1024 <= 40 + 50, "peak {} MiB", peak_kb / 1024);
     let o = run(
         &["plan", s(&d), s(&big), "--time-limit", "0.000001"],
         Stdio::piped(),
