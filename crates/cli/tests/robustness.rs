@@ -214,7 +214,7 @@ fn devices_and_directories_as_input_are_refused() {
     let o = run(&["facts", "/dev/zero"], Stdio::piped());
     assert_eq!(code(&o), 3);
     assert!(
-        stderr(&o).contains("more than the 64 MiB allowed"),
+        stderr(&o).contains("more than the 4 MiB allowed"),
         "{}",
         stderr(&o)
     );
