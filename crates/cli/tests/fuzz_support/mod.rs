@@ -137,6 +137,12 @@ pub struct Seed {
     pub target: Target,
 }
 
+/// A domain and a problem read.
+type Pair = (Arc<Domain>, Arc<Problem>);
+
+/// The input now running: when it started, its seed file, its bytes.
+type Running = (Instant, PathBuf, Vec<u8>);
+
 /// The repository root (this file is at `crates/cli/tests/fuzz_support/mod.rs`).
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -249,8 +255,7 @@ pub fn corpus(shared: bool, max_hddl: u64) -> Vec<Seed> {
     if shared {
         let vdir = root.join("crates/htn/tests/verdicts");
         if let Ok(tsv) = std::fs::read_to_string(vdir.join("verdicts.tsv")) {
-            let mut loaded: BTreeMap<(String, String), Option<(Arc<Domain>, Arc<Problem>)>> =
-                BTreeMap::new();
+            let mut loaded: BTreeMap<(String, String), Option<Pair>> = BTreeMap::new();
             for line in tsv.lines().filter(|l| !l.starts_with('#')) {
                 let cols: Vec<&str> = line.split('\t').collect();
                 let [plan, d, p, ..] = cols[..] else { continue };
@@ -929,8 +934,7 @@ pub fn run(seeds: &[Seed], opts: &Options) -> Report {
     quiet_panics();
     let began = Instant::now();
     // The watchdog: the input now running and when it started.
-    let current: Arc<std::sync::Mutex<Option<(Instant, PathBuf, Vec<u8>)>>> =
-        Arc::new(std::sync::Mutex::new(None));
+    let current: Arc<std::sync::Mutex<Option<Running>>> = Arc::new(std::sync::Mutex::new(None));
     let done = Arc::new(AtomicBool::new(false));
     {
         let (current, done, dir) = (current.clone(), done.clone(), opts.out_dir.clone());
@@ -962,7 +966,7 @@ pub fn run(seeds: &[Seed], opts: &Options) -> Report {
         if of_kind.is_empty() || n == 0 {
             continue;
         }
-        let mut rng = fastrand::Rng::with_seed(opts.seed ^ (kind as u64 + 1) * 0x9E37_79B9);
+        let mut rng = fastrand::Rng::with_seed(opts.seed ^ ((kind as u64 + 1) * 0x9E37_79B9));
         let tally = report.tallies.entry(kind).or_default();
         for i in 0..n {
             let seed = of_kind[(i as usize) % of_kind.len()];
