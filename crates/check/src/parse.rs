@@ -17,6 +17,12 @@ struct Node<'a> {
     path: &'a str,
 }
 
+/// The extent of the world: every number of a plan JSON (coordinates, sizes, quaternion
+/// components) lies within this many metres of 0, as the planner's scenes do.
+pub const EXTENT: f64 = 1000.0;
+/// The smallest size of a shape (half extent, radius, half height), in metres.
+pub const MIN_SIZE: f32 = 1e-6;
+
 /// Parse the text of a plan file (`file` names it in syntax errors).
 pub fn parse_plan(text: &str, file: &str) -> Res<Plan> {
     let v: Value = serde_json::from_str(text).map_err(|e| InputError::Syntax {
@@ -89,19 +95,28 @@ impl<'a> Node<'a> {
             .ok_or_else(|| InputError::bad(self.path, "expected a string"))
     }
 
+    /// A coordinate, size or quaternion component: finite and within [`EXTENT`] (`1e30` or
+    /// `1e308`, which f32 makes infinite, would break the collision queries).
     fn f32(self) -> Res<f32> {
         match self.v.as_f64() {
-            Some(x) if x.is_finite() => Ok(x as f32),
-            _ => Err(InputError::bad(self.path, "expected a finite number")),
+            Some(x) if x.is_finite() && x.abs() <= EXTENT => Ok(x as f32),
+            _ => Err(InputError::bad(
+                self.path,
+                format!("expected a finite number within ±{EXTENT} (metres)"),
+            )),
         }
     }
 
+    /// A size: at least [`MIN_SIZE`] (a degenerate shape breaks the collision queries).
     fn positive(self) -> Res<f32> {
         let x = self.f32()?;
-        if x > 0.0 {
+        if x >= MIN_SIZE {
             Ok(x)
         } else {
-            Err(InputError::bad(self.path, "expected a positive number"))
+            Err(InputError::bad(
+                self.path,
+                format!("expected a size of at least {MIN_SIZE} m"),
+            ))
         }
     }
 
@@ -186,8 +201,11 @@ fn part(n: Node) -> Res<Part> {
 fn shape(n: Node) -> Res<(SharedShape, Pose)> {
     if let Some(s) = n.opt("box", |b| {
         let [x, y, z] = b.get("half_extents", |n| n.floats::<3>())?;
-        if x.min(y).min(z) <= 0.0 {
-            return Err(InputError::bad(b.path, "half extents must be positive"));
+        if x.min(y).min(z) < MIN_SIZE {
+            return Err(InputError::bad(
+                b.path,
+                format!("half extents must be at least {MIN_SIZE} m"),
+            ));
         }
         Ok((SharedShape::cuboid(x, y, z), Pose::IDENTITY))
     })? {

@@ -62,6 +62,21 @@ pub fn check_file(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reads and parses an HDDL domain, printing its warnings (`warning: FILE:LINE:COL: ...`).
+pub fn load_domain(path: &Path) -> anyhow::Result<htn::model::Domain> {
+    let domain = htn::load_domain(path)?;
+    for w in &domain.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(domain)
+}
+
+/// Sets the budget of reading, parsing and compiling: the time limit from `began`, the memory
+/// limit (see `htn::budget`).
+pub fn set_budget(began: std::time::Instant, time_limit_s: f64, memory_mb: u64) {
+    htn::budget::set(began.checked_add(duration(time_limit_s)), Some(memory_mb));
+}
+
 /// [`check_file`] for each path.
 pub fn check_files<'a>(paths: impl IntoIterator<Item = &'a Path>) -> anyhow::Result<()> {
     paths.into_iter().try_for_each(check_file)

@@ -94,8 +94,16 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::from(exit::BAD_INPUT)
+            // Long tokens of a hostile input are cut; a message stays one readable line.
+            let message = htn::text::clip(&format!("{e:#}"));
+            if htn::budget::tripped().is_some() {
+                // A limit passed while reading, parsing or compiling: a limit, not bad input.
+                eprintln!("{message}");
+                ExitCode::from(exit::LIMIT)
+            } else {
+                eprintln!("error: {message}");
+                ExitCode::from(exit::BAD_INPUT)
+            }
         }
     }
 }

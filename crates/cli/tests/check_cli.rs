@@ -92,3 +92,55 @@ fn bad_input_exits_3_with_the_place() {
         "fewer than 4 sub-frames is refused"
     );
 }
+
+/// Found by the fuzz harness: a shape of 1e30 m (or a point at 1e308, infinite as f32) made
+/// the collision library panic. Such numbers are bad input now, named by key path.
+#[test]
+fn astronomical_sizes_and_coordinates_are_bad_input_not_a_panic() {
+    let text = std::fs::read_to_string(root().join("viewer/fixtures/sample-plan.json")).unwrap();
+    let sample: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for (key, field, value) in [
+        (
+            "half_extents[0]",
+            "half_extents",
+            serde_json::json!([1e30, 0.1, 0.1]),
+        ),
+        (
+            "capsule.a[2]",
+            "capsule",
+            serde_json::json!({"a": [0, 0, 1e308], "b": [0.4, 0, 0], "radius": 0.06}),
+        ),
+        (
+            "capsule.radius",
+            "capsule",
+            serde_json::json!({"a": [0, 0, 0], "b": [0.4, 0, 0], "radius": 1e-30}),
+        ),
+    ] {
+        let mut v = sample.clone();
+        *find_key(&mut v, field).expect("the sample plan has the shape") = value;
+        let plan = temp(&format!(
+            "astronomical-{}.json",
+            key.replace(['[', ']', '.'], "_")
+        ));
+        std::fs::write(&plan, serde_json::to_string(&v).unwrap()).unwrap();
+        let out = htngtp().arg("check").arg(&plan).output().expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{key}: {err}");
+        assert!(err.contains(key), "{key}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+/// The first value under `key` anywhere in `v`.
+fn find_key<'a>(v: &'a mut serde_json::Value, key: &str) -> Option<&'a mut serde_json::Value> {
+    match v {
+        serde_json::Value::Object(m) => {
+            if m.contains_key(key) {
+                return m.get_mut(key);
+            }
+            m.values_mut().find_map(|x| find_key(x, key))
+        }
+        serde_json::Value::Array(a) => a.iter_mut().find_map(|x| find_key(x, key)),
+        _ => None,
+    }
+}

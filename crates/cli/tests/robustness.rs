@@ -132,6 +132,7 @@ fn writing_to_a_full_disk_is_an_error_not_a_panic() {
         vec!["plan", s(&d), s(&p)],
         vec!["validate", s(&d), s(&p), s(&plan_file)],
         vec!["facts", s(&scene)],
+        vec!["gtp", s(&scene), "pick", "grey-book"],
     ] {
         let o = run(&cmd, full_disk());
         assert_eq!(code(&o), 3, "{cmd:?}: {}", stderr(&o));
@@ -213,7 +214,7 @@ fn devices_and_directories_as_input_are_refused() {
     let o = run(&["facts", "/dev/zero"], Stdio::piped());
     assert_eq!(code(&o), 3);
     assert!(
-        stderr(&o).contains("more than the 64 MiB allowed"),
+        stderr(&o).contains("more than the 4 MiB allowed"),
         "{}",
         stderr(&o)
     );
@@ -342,6 +343,32 @@ fn bench_hddl_interrupted_keeps_its_rows_and_leaves_no_child() {
     assert!(rows.contains("\na-tiny,p01.hddl,found,"), "{rows}");
 }
 
+/// Runs the binary and measures its peak resident memory (VmHWM of /proc, polled every 5 ms
+/// until it ends), in KiB.
+fn run_measuring_memory(args: &[&str]) -> (Output, u64) {
+    let mut child = Command::new(EXE)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let status = format!("/proc/{}/status", child.id());
+    let mut measured_kb = 0u64;
+    while child.try_wait().unwrap().is_none() {
+        if let Ok(text) = std::fs::read_to_string(&status)
+            && let Some(kb) = text
+                .lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        {
+            measured_kb = measured_kb.max(kb);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    (child.wait_with_output().unwrap(), measured_kb)
+}
+
 /// An endless search (a count that only grows) stops at the memory limit, says so, and its
 /// peak resident memory stays within 50 MiB of the limit.
 #[test]
@@ -351,9 +378,13 @@ fn the_memory_limit_stops_an_endless_search_near_the_limit() {
         htn_tests.join("counter-domain.hddl"),
         htn_tests.join("counter.hddl"),
     );
-    let o = run(
-        &["plan", s(&d), s(&p), "--memory-limit", "120", "--json"],
-        Stdio::piped(),
+    // The test measures the child's peak resident memory itself besides what it reports.
+    let (o, measured_kb) =
+        run_measuring_memory(&["plan", s(&d), s(&p), "--memory-limit", "120", "--json"]);
+    assert!(
+        measured_kb / 1024 <= 120 + 50,
+        "peak {} MiB measured",
+        measured_kb / 1024
     );
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -382,4 +413,236 @@ fn a_scene_that_starts_in_collision_is_refused_by_name() {
     let e = stderr(&o);
     assert!(e.contains("agents[0]: `pr2` (its link"), "{e}");
     assert!(e.contains("starts inside `desk`"), "{e}");
+}
+
+/// The tiny domain with `from` replaced by `to`, written to `dir/name`.
+fn tiny_domain_edited(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
+    let (d, _) = tiny_problem(dir);
+    let text = std::fs::read_to_string(&d).unwrap();
+    assert!(text.contains(from), "no `{from}` in the tiny domain");
+    let path = dir.join(name);
+    std::fs::write(&path, text.replace(from, to)).unwrap();
+    path
+}
+
+/// Issue 13, point 6: what HDDL does not allow is refused through the binary (exit 3), each
+/// with FILE:LINE:COL and a message that says what is wrong.
+#[test]
+fn hddl_the_language_does_not_allow_is_refused_with_its_place() {
+    let dir = scratch("hddl-leniency");
+    let (_, p) = tiny_problem(&dir);
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (
+            tiny_domain_edited(&dir, "nul.hddl", "(done))", "(do\0ne))"),
+            ":1:66: control character U+0000 is not allowed",
+        ),
+        (
+            tiny_domain_edited(&dir, "quoted.hddl", "(done))", "(\"done\"))"),
+            ":1:64: quoted strings are not HDDL",
+        ),
+        (
+            tiny_domain_edited(&dir, "bom.hddl", "(define", "\u{feff}(define"),
+            ":1:1: a UTF-8 byte-order mark (U+FEFF)",
+        ),
+        (
+            tiny_domain_edited(
+                &dir,
+                "number-type.hddl",
+                "(:predicates",
+                "(:types 123 - object) (:predicates",
+            ),
+            ":1:58: a name must start with a letter, found `123`",
+        ),
+        (
+            tiny_domain_edited(
+                &dir,
+                "requirement.hddl",
+                ":hierarchy",
+                ":hierarchy :time-travel",
+            ),
+            ":1:49: unknown requirement `:time-travel`",
+        ),
+        (
+            tiny_domain_edited(
+                &dir,
+                "action-twice.hddl",
+                "(:action finish",
+                "(:action finish :parameters ()) (:action finish",
+            ),
+            "`finish` is already declared as an action at",
+        ),
+        (
+            // The method's `)` is missing: its section swallows the action after it.
+            tiny_domain_edited(&dir, "unclosed.hddl", "(and (finish)))", "(and (finish))"),
+            ":3:12: this `(` is never closed: the section `(:action` at 4:12 lies inside it",
+        ),
+    ];
+    for (d, phrase) in cases {
+        let o = run(&["plan", s(&d), s(&p)], Stdio::piped());
+        let e = stderr(&o);
+        assert_eq!(code(&o), 3, "{}: {e}", d.display());
+        assert!(
+            e.contains(phrase),
+            "{}: expected `{phrase}` in\n{e}",
+            d.display()
+        );
+        assert_eq!(e.lines().count(), 1, "one line: {e}");
+    }
+    // A problem's object named by a number.
+    let (d, _) = tiny_problem(&dir);
+    let bad = dir.join("number-object.hddl");
+    std::fs::write(
+        &bad,
+        "(define (problem p) (:domain tiny) (:objects 123) (:htn :parameters () :ordered-subtasks (and (go))) (:init))",
+    )
+    .unwrap();
+    let o = run(&["plan", s(&d), s(&bad)], Stdio::piped());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(":1:46: a name must start with a letter, found `123`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// An undeclared parent type is read (as the IPC's files need) with a warning at its place.
+#[test]
+fn an_undeclared_parent_type_is_a_warning_through_the_binary() {
+    let dir = scratch("parent-type");
+    let (_, p) = tiny_problem(&dir);
+    let d = tiny_domain_edited(
+        &dir,
+        "parent.hddl",
+        "(:predicates",
+        "(:types a - thing) (:predicates",
+    );
+    let o = run(&["plan", s(&d), s(&p)], Stdio::piped());
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: ".to_string().as_str())
+            && stderr(&o).contains(":1:58: the parent type `thing` of `a` is not declared"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// `validate` cuts a 300 KB token in its messages, and calls an empty plan empty.
+#[test]
+fn validate_cuts_long_tokens_and_names_an_empty_plan() {
+    let dir = scratch("validate-messages");
+    let (d, p) = tiny_problem(&dir);
+    let long = "x".repeat(300_000);
+    for (name, text) in [
+        (
+            "long-name.plan",
+            format!("==>\n1 {long}\nroot 0\n0 go -> m 1\n<==\n"),
+        ),
+        ("long-id.plan", format!("==>\n{long} finish\nroot 0\n<==\n")),
+    ] {
+        let plan = dir.join(name);
+        std::fs::write(&plan, text).unwrap();
+        let o = run(&["validate", s(&d), s(&p), s(&plan)], Stdio::piped());
+        let all = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+        assert!(matches!(code(&o), 1 | 3), "{all}");
+        assert!(all.len() < 1000, "{name}: {} bytes of messages", all.len());
+        assert!(all.contains("xxxx…"), "{name}: {all}");
+    }
+    let plan = dir.join("long-id.plan");
+    let o = run(&["validate", s(&d), s(&p), s(&plan)], Stdio::piped());
+    assert!(
+        stderr(&o).contains("long-id.plan:2:1: `xxx"),
+        "{}",
+        stderr(&o)
+    );
+    let empty = dir.join("empty.plan");
+    std::fs::write(&empty, "").unwrap();
+    let o = run(&["validate", s(&d), s(&p), s(&empty)], Stdio::piped());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("empty.plan: the plan is empty"), "{e}");
+    assert!(!e.contains("line 0"), "{e}");
+}
+
+/// A GTP error under `plan --scene` is printed once.
+#[test]
+fn a_geometric_error_under_plan_scene_is_printed_once() {
+    let dir = scratch("gtp-error-once");
+    let lib = root().join("domains/library");
+    let problem = dir.join("purple.hddl");
+    let text = std::fs::read_to_string(lib.join("fig4.hddl")).unwrap();
+    std::fs::write(&problem, text.replace("grey-book", "purple-book")).unwrap();
+    let o = run(
+        &[
+            "plan",
+            s(&lib.join("domain-compound.hddl")),
+            s(&problem),
+            "--scene",
+            s(&lib.join("scene.toml")),
+        ],
+        Stdio::piped(),
+    );
+    let e = stderr(&o);
+    assert_eq!(code(&o), 3, "{e}");
+    assert_eq!(e.matches("no such object").count(), 1, "{e}");
+    assert!(
+        e.contains("argument object `purple-book`: no such object"),
+        "{e}"
+    );
+}
+
+/// The limits hold while reading: a memory limit smaller than the file stops the command with
+/// exit 2 and says where, before the search; so does a time limit passed while reading
+/// (a file far longer than can be read in the time given).
+#[test]
+fn limits_stop_reading_and_parsing_with_exit_2() {
+    let dir = scratch("limits-while-reading");
+    let (d, _) = tiny_problem(&dir);
+    let objects: String = (0..200_000).map(|i| format!("o{i} ")).collect();
+    let big = dir.join("big.hddl");
+    std::fs::write(
+        &big,
+        format!(
+            "(define (problem p) (:domain tiny) (:objects {objects}) (:htn :parameters () :ordered-subtasks (and (go))) (:init))"
+        ),
+    )
+    .unwrap();
+    let o = run(
+        &["plan", s(&d), s(&big), "--memory-limit", "1"],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("stopped: memory limit reached while reading this file"),
+        "{}",
+        stderr(&o)
+    );
+    // A problem whose reading alone would take far more memory than allowed stops near the
+    // limit (measured here).
+    let objects: String = (0..1_000_000).map(|i| format!("o{i} ")).collect();
+    let huge = dir.join("huge.hddl");
+    std::fs::write(
+        &huge,
+        format!(
+            "(define (problem p) (:domain tiny) (:objects {objects}) (:htn :parameters () :ordered-subtasks (and (go))) (:init))"
+        ),
+    )
+    .unwrap();
+    let (o, peak_kb) = run_measuring_memory(&["plan", s(&d), s(&huge), "--memory-limit", "40"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("stopped: memory limit reached while"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(peak_kb / 1024 <= 40 + 50, "peak {} MiB", peak_kb / 1024);
+    let o = run(
+        &["plan", s(&d), s(&big), "--time-limit", "0.000001"],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("stopped: time limit reached while"),
+        "{}",
+        stderr(&o)
+    );
 }

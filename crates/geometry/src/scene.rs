@@ -24,9 +24,19 @@ use crate::mesh_file;
 /// mightability maps) astronomically large.
 pub const WORLD_EXTENT_M: f32 = 1000.0;
 
-/// The largest scene file read (64 MiB; the library scenes are a few KiB). Reading stops there,
-/// so a device (`/dev/zero`) or a runaway file cannot fill memory.
-pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+/// The largest scene file read (4 MiB: a scene of [`MAX_OBJECTS`] objects takes about 2 MiB; the
+/// library scenes are a few KiB). Reading stops there, so a device (`/dev/zero`) or a runaway
+/// file cannot fill memory: parsing TOML takes about 64 times the file's size in memory
+/// ([`SCENE_MEMORY_PER_BYTE`]), so 4 MiB stays near 300 MB.
+pub const MAX_SCENE_BYTES: u64 = 4 << 20;
+
+/// About how many bytes of memory reading a scene takes per byte of its file (measured: 60-65
+/// for scenes of 20,000 and 60,000 small objects).
+pub const SCENE_MEMORY_PER_BYTE: u64 = 64;
+
+/// The most objects a scene may have: every load checks them against each other for initial
+/// collisions, and the shared literals are computed per agent and object.
+pub const MAX_OBJECTS: usize = 10_000;
 
 /// An error in a scene file: `FILE[:LINE:COL]: key.path: reason`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -381,6 +391,15 @@ impl Scene {
         let ck = Checker {
             file: source.to_string(),
         };
+        if file.objects.len() > MAX_OBJECTS {
+            return Err(ck.err(
+                "objects",
+                format!(
+                    "{} objects, more than the {MAX_OBJECTS} a scene may have",
+                    file.objects.len()
+                ),
+            ));
+        }
         let mut objects = Vec::with_capacity(file.objects.len());
         let mut initial_poses = Vec::with_capacity(file.objects.len());
         let mut object_index = HashMap::new();

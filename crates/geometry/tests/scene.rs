@@ -191,3 +191,41 @@ movable = true
     let scene = geometry::scene::Scene::from_str(text, "t.toml", Path::new("."), "t").unwrap();
     assert!(World::from_scene(scene).is_ok());
 }
+
+/// A scene of `n` small boxes on a 100-wide grid, the last one (if `overlap`) placed inside
+/// the one before it.
+fn many_boxes(n: usize, overlap: bool) -> String {
+    let mut text = String::new();
+    for i in 0..n {
+        let (x, y) = if overlap && i == n - 1 {
+            (((i - 1) % 100) as f32 * 0.05, ((i - 1) / 100) as f32 * 0.05)
+        } else {
+            ((i % 100) as f32 * 0.05, (i / 100) as f32 * 0.05)
+        };
+        text += &format!(
+            "[[objects]]\nname = \"o{i}\"\nmovable = true\nshape = {{ box = [0.01, 0.01, 0.01] }}\npose = {{ xyz = [{x}, {y}, 0.02] }}\n"
+        );
+    }
+    text
+}
+
+/// At most 10,000 objects; among many, the initial overlap is found (by a sweep, not by trying
+/// 50 M pairs) and named as in a small scene.
+#[test]
+fn object_count_is_capped_and_overlaps_among_many_are_found() {
+    let dir = Path::new("/nonexistent");
+    let e = Scene::from_str(&many_boxes(10_001, false), "big.toml", dir, "big").unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("objects: 10001 objects, more than the 10000 a scene may have"),
+        "{e}"
+    );
+    let scene = Scene::from_str(&many_boxes(10_000, false), "ok.toml", dir, "ok").unwrap();
+    assert!(World::from_scene(scene).is_ok());
+    let scene = Scene::from_str(&many_boxes(10_000, true), "bad.toml", dir, "bad").unwrap();
+    let Err(e) = World::from_scene(scene) else {
+        panic!("an overlap among 10,000 objects was not found");
+    };
+    let e = e.to_string();
+    assert!(e.contains("`o9999` starts inside `o9998`"), "{e}");
+}

@@ -269,6 +269,9 @@ pub struct Domain {
     pub actions: Vec<Action>,
     /// How the file spells its declared names.
     pub spelling: Spellings,
+    /// What the file does that HDDL allows only by custom, each at its place (an undeclared
+    /// parent type, taken as a subtype of `object`). The binary prints them as warnings.
+    pub warnings: Vec<crate::parser::ParseError>,
 }
 
 /// A ground fact of the initial state.

@@ -60,13 +60,35 @@ pub struct Plan {
 }
 
 /// A line of a plan text that could not be read.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("plan line {line}: {message}")]
+///
+/// Displayed as `LINE:COL: message`, or `message` alone for the text as a whole (no `root`
+/// line, an empty file); the caller puts the file name in front. Long tokens are cut.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PlanParseError {
     /// 1-based line in the plan text (0: the text as a whole).
     pub line: usize,
+    /// 1-based column (in characters) of the word at fault (0: the text as a whole).
+    pub col: usize,
     pub message: String,
 }
+
+impl std::fmt::Display for PlanParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let message = crate::text::clip(&self.message);
+        if self.line == 0 {
+            write!(f, "{message}")
+        } else {
+            write!(f, "{}:{}: {message}", self.line, self.col)
+        }
+    }
+}
+
+impl std::error::Error for PlanParseError {}
+
+/// What a plan in the competition format looks like, for messages.
+const FORMAT: &str = "expected the competition format: `==>`, one `ID action args...` line per \
+                      action, `root IDs`, one `ID task args -> method IDs` line per \
+                      decomposition, `<==`";
 
 impl Plan {
     /// The plan in the competition format, between `==>` and `<==`.
@@ -109,80 +131,127 @@ impl Plan {
             .position(|l| l.trim() == "==>")
             .map_or(0, |i| i + 1);
         let mut plan = Plan::default();
-        let mut seen_root = false;
-        let err = |line: usize, message: String| PlanParseError { line, message };
+        let mut root_line: Option<usize> = None;
+        let mut last_line = 0;
         for (i, raw) in lines.iter().enumerate().skip(start) {
             let n = i + 1;
-            let line = raw.split(';').next().unwrap_or("").trim();
-            if line.is_empty() {
+            let content = raw.split(';').next().unwrap_or("");
+            if content.trim().is_empty() {
                 continue;
             }
-            if line == "<==" {
+            if content.trim() == "<==" {
                 break;
             }
-            let words: Vec<String> = line.split_whitespace().map(str::to_string).collect();
-            if words[0] == "root" {
-                if seen_root {
-                    return Err(err(n, "a second `root` line".into()));
+            last_line = n;
+            // Each word with its 1-based column in characters.
+            let words = words_with_columns(content);
+            let err = |k: usize, message: String| PlanParseError {
+                line: n,
+                col: words.get(k).map_or(1, |w| w.0),
+                message,
+            };
+            let word = |k: usize| words.get(k).map_or("", |w| w.1);
+            if word(0) == "root" {
+                if let Some(first) = root_line {
+                    return Err(err(
+                        0,
+                        format!("a second `root` line (the first is line {first})"),
+                    ));
                 }
-                seen_root = true;
-                for w in &words[1..] {
-                    plan.root.push(parse_id(w).map_err(|m| err(n, m))?);
+                root_line = Some(n);
+                for k in 1..words.len() {
+                    plan.root.push(parse_id(word(k)).map_err(|m| err(k, m))?);
                 }
                 continue;
             }
-            let id = parse_id(&words[0]).map_err(|m| {
+            let id = parse_id(word(0)).map_err(|m| {
                 err(
-                    n,
+                    0,
                     format!("{m} (expected `ID name args...`, `root IDs` or `ID task args -> method IDs`)"),
                 )
             })?;
             if words.len() < 2 {
-                return Err(err(n, format!("id {id} has no action or task name")));
+                return Err(err(0, format!("id {id} has no action or task name")));
             }
-            if let Some(arrow) = words.iter().position(|w| w == "->") {
-                if !seen_root {
-                    return Err(err(n, "a decomposition line before the `root` line".into()));
-                }
-                let Some(method) = words.get(arrow + 1) else {
-                    return Err(err(n, "expected a method name after `->`".into()));
-                };
-                if arrow < 2 {
-                    return Err(err(n, "expected a task name before `->`".into()));
-                }
-                let subtasks = words[arrow + 2..]
+            let names = |from: usize, to: usize| -> Vec<String> {
+                words
+                    .get(from..to)
+                    .unwrap_or_default()
                     .iter()
-                    .map(|w| parse_id(w))
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|m| err(n, m))?;
+                    .map(|w| w.1.to_string())
+                    .collect()
+            };
+            if let Some(arrow) = words.iter().position(|w| w.1 == "->") {
+                if root_line.is_none() {
+                    return Err(err(0, "a decomposition line before the `root` line".into()));
+                }
+                if words.len() <= arrow + 1 {
+                    return Err(err(arrow, "expected a method name after `->`".into()));
+                }
+                if arrow < 2 {
+                    return Err(err(arrow, "expected a task name before `->`".into()));
+                }
+                let subtasks = (arrow + 2..words.len())
+                    .map(|k| parse_id(word(k)).map_err(|m| err(k, m)))
+                    .collect::<Result<Vec<_>, _>>()?;
                 plan.decompositions.push(Decomposition {
                     id,
-                    task: words[1].clone(),
-                    args: words[2..arrow].to_vec(),
-                    method: method.clone(),
+                    task: word(1).to_string(),
+                    args: names(2, arrow),
+                    method: word(arrow + 1).to_string(),
                     subtasks,
                 });
             } else {
-                if seen_root {
+                if root_line.is_some() {
                     return Err(err(
-                        n,
+                        0,
                         "an action line after the `root` line (expected `ID task args -> method IDs`)"
                             .into(),
                     ));
                 }
                 plan.actions.push(PlanAction {
                     id,
-                    name: words[1].clone(),
-                    args: words[2..].to_vec(),
+                    name: word(1).to_string(),
+                    args: names(2, words.len()),
                     geometric: None,
                 });
             }
         }
-        if !seen_root {
-            return Err(err(0, "no `root` line".into()));
+        if root_line.is_none() {
+            let message = if last_line == 0 {
+                format!("the plan is empty ({FORMAT})")
+            } else {
+                format!("no `root` line ({FORMAT})")
+            };
+            return Err(PlanParseError {
+                line: 0,
+                col: 0,
+                message,
+            });
         }
         Ok(plan)
     }
+}
+
+/// The words of `line` with the 1-based column (in characters) each starts at.
+fn words_with_columns(line: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut start: Option<(usize, usize)> = None; // (byte, column) of the word being read
+    let mut col = 0;
+    for (i, c) in line.char_indices() {
+        col += 1;
+        if c.is_whitespace() {
+            if let Some((b, k)) = start.take() {
+                out.push((k, &line[b..i]));
+            }
+        } else if start.is_none() {
+            start = Some((i, col));
+        }
+    }
+    if let Some((b, k)) = start {
+        out.push((k, &line[b..]));
+    }
+    out
 }
 
 impl Plan {
@@ -240,8 +309,12 @@ enum NameKind {
 }
 
 fn parse_id(w: &str) -> Result<u32, String> {
-    w.parse::<u32>()
-        .map_err(|_| format!("`{w}` is not an id (a non-negative integer)"))
+    w.parse::<u32>().map_err(|_| {
+        format!(
+            "`{}` is not an id (a non-negative integer)",
+            crate::text::cut(w, crate::text::MAX_WORD)
+        )
+    })
 }
 
 #[cfg(test)]
@@ -275,10 +348,26 @@ mod tests {
     #[test]
     fn parse_errors_name_the_line() {
         let e = Plan::parse("==>\nx noop\nroot 0\n").unwrap_err();
-        assert_eq!(e.line, 2);
+        assert_eq!((e.line, e.col), (2, 1));
         let e = Plan::parse("==>\n1 noop\n").unwrap_err();
-        assert!(e.message.contains("root"));
+        assert!(e.message.starts_with("no `root` line"), "{e}");
+        assert_eq!(e.to_string(), e.message);
         let e = Plan::parse("==>\nroot 0\n0 t ->\n").unwrap_err();
-        assert_eq!(e.line, 3);
+        assert_eq!((e.line, e.col), (3, 5));
+        let e = Plan::parse("==>\nroot 0 \t x\n").unwrap_err();
+        assert_eq!((e.line, e.col), (2, 10));
+        assert!(e.to_string().starts_with("2:10: `x` is not an id"), "{e}");
+    }
+
+    #[test]
+    fn an_empty_plan_is_called_empty_and_long_tokens_are_cut() {
+        for empty in ["", "\n\n", "==>\n<==\n", "; only a comment\n"] {
+            let e = Plan::parse(empty).unwrap_err();
+            assert_eq!(e.line, 0);
+            assert!(e.to_string().starts_with("the plan is empty"), "{e}");
+        }
+        let long = "x".repeat(300_000);
+        let e = Plan::parse(&format!("==>\n{long} a\nroot 0\n")).unwrap_err();
+        assert!(e.to_string().len() < 300, "{}", e.to_string().len());
     }
 }

@@ -35,15 +35,16 @@ type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// The first fault found in a plan.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("invalid plan: {0}")]
+#[error("invalid plan: {}", crate::text::clip(.0))]
 pub struct Fault(pub String);
 
 type Key = Vec<String>;
 
 struct World<'a> {
     domain: &'a Domain,
-    /// Object to its types (declared type and all ancestors, and `object`).
-    types: HashMap<String, HashSet<String>>,
+    /// Object to its types (declared type and all ancestors, and `object`); objects of one
+    /// declared type share the set.
+    types: HashMap<String, std::rc::Rc<HashSet<String>>>,
     /// Type to its objects.
     objects_of: HashMap<String, Vec<String>>,
 }
@@ -244,6 +245,12 @@ fn check(
 ) -> Result<(), Fault> {
     let w = World::new(domain, problem);
     let fault = |m: String| Err(Fault(m));
+    // The process's budget (set by the binary) covers validating the plan it found.
+    let within_budget = || match crate::budget::check() {
+        Some(limit) => Err(Fault(crate::budget::message(limit, "validating the plan"))),
+        None => Ok(()),
+    };
+    within_budget()?;
 
     // Ids.
     let mut action_at: HashMap<u32, usize> = HashMap::new();
@@ -434,8 +441,12 @@ fn check(
     for v in &problem.init_values {
         st.values.insert(key(&v.function, &v.args), v.value);
     }
+    within_budget()?;
     let mut next_dec = 0;
     for pos in 0..=plan.actions.len() {
+        if pos % 256 == 255 {
+            within_budget()?;
+        }
         while next_dec < dec_pos.len() && dec_pos[next_dec].1 == pos {
             let di = dec_pos[next_dec].0;
             let d = &plan.decompositions[di];
@@ -542,15 +553,31 @@ impl<'a> World<'a> {
                 .or_default()
                 .extend(t.parents.iter().map(String::as_str));
         }
-        let mut types: HashMap<String, HashSet<String>> = HashMap::new();
+        // Each declared type's ancestor set, computed once.
+        let mut ancestors: HashMap<&str, std::rc::Rc<HashSet<String>>> = HashMap::new();
+        let mut types: HashMap<String, std::rc::Rc<HashSet<String>>> = HashMap::new();
         for o in domain.constants.iter().chain(&problem.objects) {
-            let set = types.entry(o.name.clone()).or_default();
-            let mut todo = vec![o.ty.as_str(), OBJECT_TYPE];
-            while let Some(t) = todo.pop() {
-                if set.insert(t.to_string())
-                    && let Some(ps) = parents.get(t)
-                {
-                    todo.extend(ps.iter().copied());
+            let set = ancestors.entry(o.ty.as_str()).or_insert_with(|| {
+                let mut set = HashSet::new();
+                let mut todo = vec![o.ty.as_str(), OBJECT_TYPE];
+                while let Some(t) = todo.pop() {
+                    if set.insert(t.to_string())
+                        && let Some(ps) = parents.get(t)
+                    {
+                        todo.extend(ps.iter().copied());
+                    }
+                }
+                std::rc::Rc::new(set)
+            });
+            // A name declared twice (a constant and an object) has the types of both.
+            match types.get_mut(&o.name) {
+                Some(had) => {
+                    let mut both: HashSet<String> = (**had).clone();
+                    both.extend(set.iter().cloned());
+                    *had = std::rc::Rc::new(both);
+                }
+                None => {
+                    types.insert(o.name.clone(), set.clone());
                 }
             }
         }
@@ -558,7 +585,7 @@ impl<'a> World<'a> {
         let mut names: Vec<&String> = types.keys().collect();
         names.sort();
         for o in names {
-            for t in &types[o] {
+            for t in types[o].iter() {
                 objects_of.entry(t.clone()).or_default().push(o.clone());
             }
         }

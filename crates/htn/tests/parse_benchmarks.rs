@@ -159,3 +159,35 @@ fn a_reversed_ordering_in_a_benchmark_is_followed() {
         "names are lower-cased"
     );
 }
+
+/// Every HDDL file the project ships (`domains/`) parses, each problem with the domain of its
+/// folder, and with no warning.
+#[test]
+fn every_shipped_file_parses_without_warnings() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../domains");
+    let files = hddl_files(&dir);
+    assert!(files.len() >= 7, "{} files", files.len());
+    for f in &files {
+        if is_domain_file_name(f) {
+            let d = load_domain(f).unwrap_or_else(|e| panic!("{e}"));
+            assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+            continue;
+        }
+        for d in ["domain.hddl", "domain-compound.hddl"] {
+            let d = load_domain(f.with_file_name(d)).unwrap_or_else(|e| panic!("{e}"));
+            load_problem(f, &d).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+}
+
+/// The IPC's AssemblyHierarchical names a parent type (`enum`) that it never declares: read, as
+/// the competition's parser reads it, with a warning at the place.
+#[test]
+fn an_undeclared_parent_type_is_a_warning() {
+    let Some(b) = benchmarks() else { return };
+    let d = load_domain(b.join("ipc2020-total-order/AssemblyHierarchical/domain.hddl"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let w = d.warnings.first().expect("a warning");
+    assert!(w.message.contains("parent type `enum`"), "{w}");
+    assert!(w.line > 0 && w.col > 0, "{w}");
+}

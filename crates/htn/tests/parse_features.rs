@@ -411,3 +411,21 @@ fn a_quantified_variable_shadows_a_parameter_only_inside_its_quantifier() {
     assert_eq!((e.line, e.col), (3, 52));
     assert!(e.message.contains("does not fit"), "{e}");
 }
+
+/// A parent type named nowhere else is taken as a subtype of `object`, with a warning at the
+/// place; a declared one gives none.
+#[test]
+fn an_undeclared_parent_type_is_read_with_a_warning() {
+    let d = domain("(define (domain d) (:types truck - vehicle) (:predicates (at ?t - truck)))");
+    assert_eq!(d.warnings.len(), 1);
+    let w = &d.warnings[0];
+    assert_eq!((w.line, w.col), (1, 28));
+    assert!(
+        w.message.contains(
+            "the parent type `vehicle` of `truck` is not declared; taken as a subtype of `object`"
+        ),
+        "{w}"
+    );
+    let d = domain("(define (domain d) (:types truck - vehicle vehicle - object))");
+    assert!(d.warnings.is_empty());
+}

@@ -14,11 +14,11 @@ use crate::oracle::{GtpOracle, OracleConfig};
 /// Why a run could not start or was stopped by a broken input.
 #[derive(Debug, thiserror::Error)]
 pub enum HybridError {
-    #[error("{0}")]
+    #[error(transparent)]
     Parse(#[from] htn::ParseError),
-    #[error("{0}")]
+    #[error(transparent)]
     Scene(#[from] geometry::scene::SceneError),
-    #[error("{0}")]
+    #[error(transparent)]
     Plan(#[from] htn::planner::PlanError),
     #[error("the plan found does not validate: {0}")]
     Invalid(String),

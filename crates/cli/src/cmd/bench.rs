@@ -117,7 +117,7 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
         .clone()
         .unwrap_or_else(|| dir.join("pay-by-card.hddl"));
     let scene_path = args.scene.clone().unwrap_or_else(|| dir.join("scene.toml"));
-    let domain = htn::load_domain(&domain_path)?;
+    let domain = crate::input::load_domain(&domain_path)?;
     let problem = htn::load_problem(&problem_path, &domain)?;
     let world = World::load(&scene_path).map_err(|e| anyhow::anyhow!("{e}"))?;
     let strategies: Vec<_> = if args.compare {

@@ -63,11 +63,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         dir.join("scene.toml").display()
     );
     let json_file = args.out.join("plan.json");
-    let domain = htn::load_domain(dir.join("domain-compound.hddl"))?;
+    let began = std::time::Instant::now();
+    let domain = crate::input::load_domain(&dir.join("domain-compound.hddl"))?;
     let problem = htn::load_problem(dir.join("fig4.hddl"), &domain)?;
     let code = run_plan(
         &domain,
         &problem,
+        began,
         &dir.join("scene.toml"),
         PlannerOptions {
             seed: args.seed,

@@ -27,17 +27,30 @@ pub struct Outputs {
 }
 
 /// Plans `problem` of `domain` in `scene` and reports; returns the exit code.
+/// `domain` and `problem` are read; `began` is when the command started reading.
 pub fn run_plan(
     domain: &Domain,
     problem: &Problem,
+    began: std::time::Instant,
     scene: &Path,
     planner: PlannerOptions,
     oracle: OracleConfig,
     out: &Outputs,
 ) -> anyhow::Result<u8> {
-    let began = std::time::Instant::now();
+    // Reading a scene takes about 64 times its size in memory (TOML's tree): the memory limit
+    // holds there too.
+    let len = std::fs::metadata(scene).map(|m| m.len()).unwrap_or(0);
+    if !htn::budget::fits(len.saturating_mul(geometry::scene::SCENE_MEMORY_PER_BYTE)) {
+        anyhow::bail!(htn::budget::message(
+            htn::planner::Limit::Memory,
+            &format!("reading the scene {} ({} KiB)", scene.display(), len >> 10)
+        ));
+    }
     let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
-    // The time limit covers reading the scene: the planner gets what is left.
+    if let Some(limit) = htn::budget::check() {
+        anyhow::bail!(htn::budget::message(limit, "reading the scene"));
+    }
+    // The time limit covers reading the files: the planner gets what is left.
     let mut planner = planner;
     planner.limits.time = planner
         .limits
@@ -51,7 +64,12 @@ pub fn run_plan(
         std::sync::Arc::new(gtp::planner::Planner::new()),
         &options,
     )?;
-    let json = hybrid::export::plan_json(&run, &domain.name, &problem.name);
+    // The plan JSON holds the whole scene and every trajectory: built only when asked for.
+    let json = if out.json || out.json_file.is_some() {
+        hybrid::export::plan_json(&run, &domain.name, &problem.name)
+    } else {
+        serde_json::Value::Null
+    };
     if out.json {
         println!("{}", serde_json::to_string(&json)?);
     } else {

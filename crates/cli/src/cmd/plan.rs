@@ -119,7 +119,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let scene = args.scene.as_deref();
     crate::input::check_files([&*args.domain, &*args.problem].into_iter().chain(scene))?;
     let began = std::time::Instant::now();
-    let domain = htn::load_domain(&args.domain)?;
+    crate::input::set_budget(began, args.time_limit, args.memory_limit);
+    let domain = crate::input::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let options = PlannerOptions {
         limits: Limits {
@@ -149,12 +150,18 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json_file: args.json_out.clone(),
             png_dir: args.png.clone(),
         };
-        return crate::cmd::geo::run_plan(&domain, &problem, scene, options, oracle, &out);
+        return crate::cmd::geo::run_plan(&domain, &problem, began, scene, options, oracle, &out);
     }
     let result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;
     if let Outcome::Found { plan } = &result.outcome {
-        htn::validate::validate(&domain, &problem, plan, &[]).context(
+        let checked = htn::validate::validate(&domain, &problem, plan, &[]);
+        if let (Err(e), Some(_)) = (&checked, htn::budget::tripped()) {
+            // The limits cover the validation too: a plan not validated is not printed.
+            eprintln!("{}", e.0);
+            return Ok(exit::LIMIT);
+        }
+        checked.context(
             "BUG: the planner returned a plan that the validator rejects; please report it",
         )?;
         plan_text = Some(plan.to_competition_format());

@@ -36,7 +36,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
     crate::input::check_files([&*args.domain, &*args.problem, &*args.plan])?;
-    let domain = htn::load_domain(&args.domain)?;
+    let domain = crate::input::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
     let text = std::fs::read_to_string(&args.plan)
         .with_context(|| format!("cannot read plan file {}", args.plan.display()))?;
@@ -51,8 +51,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         serde_json::from_value::<htn::plan::Plan>(p.clone())
             .with_context(|| format!("{}: not a plan in JSON", args.plan.display()))?
     } else {
-        htn::plan::Plan::parse(&text)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", args.plan.display()))?
+        htn::plan::Plan::parse(&text).map_err(|e| {
+            // `FILE:LINE:COL: message`, or `FILE: message` for the plan as a whole.
+            let sep = if e.line > 0 { ":" } else { ": " };
+            anyhow::anyhow!("{}{sep}{e}", args.plan.display())
+        })?
     };
     let names = if args.lenient {
         htn::validate::Names::CaseInsensitive

@@ -158,6 +158,20 @@ pub(crate) fn is_variable(s: &str) -> bool {
     s.len() > 1 && s.starts_with('?')
 }
 
+/// Whether a declared name starts as HDDL (and PDDL) requires: with a letter (`123` or `-x`
+/// cannot name a type, object, predicate, task, action or method; `?1` cannot name a variable).
+pub(crate) fn starts_with_letter(s: &str) -> bool {
+    s.trim_start_matches('?')
+        .chars()
+        .next()
+        .is_some_and(char::is_alphabetic)
+}
+
+/// The error for a declared name that does not start with a letter.
+pub(crate) fn not_a_letter(what: &str, raw: &str) -> String {
+    format!("{what} must start with a letter, found `{}`", shorten(raw))
+}
+
 /// A number as HDDL writes it: `-?digits(.digits)?`.
 pub(crate) fn parse_number(s: &str) -> Option<f64> {
     let body = s.strip_prefix('-').unwrap_or(s);
@@ -218,6 +232,23 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// An error when the process's budget (time, memory) is spent, at `at`.
+    pub fn within_budget(&self, at: Span, what: &str) -> Result<()> {
+        match crate::budget::check() {
+            Some(limit) => Err(self.err(at, crate::budget::message(limit, what))),
+            None => Ok(()),
+        }
+    }
+
+    /// A plain name that a declaration introduces: it must also start with a letter.
+    pub fn declared_name(&self, s: &Sexp, what: &str) -> Result<String> {
+        let name = self.name(s, what)?;
+        if !starts_with_letter(&name) {
+            return Err(self.err(s.span(), not_a_letter(what, &name)));
+        }
+        Ok(name)
+    }
+
     /// The item after a keyword or `-`, or an error at `at` saying what is missing.
     pub fn next<'s>(&self, items: &'s [Sexp], i: usize, at: Span, what: &str) -> Result<&'s Sexp> {
         items
@@ -239,6 +270,9 @@ impl<'a> Ctx<'a> {
         let mut seen: HashMap<&str, usize> = HashMap::new();
         let mut i = 0;
         while let Some(item) = items.get(i) {
+            if i % 4096 == 4095 {
+                self.within_budget(item.span(), "reading a list of names")?;
+            }
             let text = self.atom(item, what)?;
             if text == "-" {
                 if pending == 0 {
@@ -252,6 +286,9 @@ impl<'a> Ctx<'a> {
                     ));
                 }
                 let ty = self.name(ty_item, "a type name")?;
+                if types.is_none() && !starts_with_letter(&ty) {
+                    return Err(self.err(ty_item.span(), not_a_letter("a type name", &ty)));
+                }
                 if let Some(types) = types
                     && !types.contains(&ty)
                 {
@@ -278,6 +315,9 @@ impl<'a> Ctx<'a> {
                     item.span(),
                     format!("expected {what}, found `{}`", shorten(text)),
                 ));
+            }
+            if !starts_with_letter(text) {
+                return Err(self.err(item.span(), not_a_letter(what, text)));
             }
             if let Some(prev) = seen.get(text).and_then(|&i| out.get(i)) {
                 return Err(self.err(
@@ -308,7 +348,7 @@ impl<'a> Ctx<'a> {
         let Some(first) = items.first() else {
             return Err(self.err(s.span(), format!("empty {what} declaration")));
         };
-        let name = self.name(first, &format!("a {what} name"))?;
+        let name = self.declared_name(first, &format!("a {what} name"))?;
         let params = self.typed_list(
             items.get(1..).unwrap_or_default(),
             true,

@@ -11,7 +11,7 @@ use crate::model::{
 use super::context::{Ctx, Result, Scope, Tables};
 use super::error::ParseError;
 use super::formula::Evaluable;
-use super::sexpr::{Sexp, read, shorten};
+use super::sexpr::{Sexp, Tree, read, shorten};
 use super::types::TypeTable;
 
 /// The items of `(define (KIND NAME) ...)`, the name and its span, from the top level of a file.
@@ -57,7 +57,9 @@ pub(crate) fn define<'s>(
     })?;
     match header.as_list() {
         Some([k, name]) if k.as_atom() == Some(kind) => match name.as_atom() {
-            Some(n) if super::context::is_name(n) => Ok((items, n.to_string(), name.span())),
+            Some(n) if super::context::is_name(n) && super::context::starts_with_letter(n) => {
+                Ok((items, n.to_string(), name.span()))
+            }
             _ => Err(ParseError::new(
                 file,
                 name.span(),
@@ -107,8 +109,8 @@ pub(crate) fn section<'s>(
 
 /// Parses a domain. See [`super`] for the accepted language.
 pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domain, ParseError> {
-    let top = read(text, &source)?;
-    let (items, name, _) = define(&top, "domain", &source)?;
+    let top = Tree(read(text, &source)?);
+    let (items, name, _) = define(&top.0, "domain", &source)?;
     let file = &source;
 
     let mut domain = Domain {
@@ -125,6 +127,7 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
         methods: Vec::new(),
         actions: Vec::new(),
         spelling: Spellings::default(),
+        warnings: Vec::new(),
     };
 
     // Sort the sections by kind, keeping file order within a kind.
@@ -166,18 +169,10 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     }
     let part = |key: &str| once.get(key).map(|(_, rest)| *rest);
 
-    // Requirements are recorded, not enforced: files often under- or over-declare them.
+    // Requirements must be known ones; they are recorded, not enforced (files often under- or
+    // over-declare them).
     for r in part(":requirements").unwrap_or_default() {
-        match r.as_atom() {
-            Some(a) if a.starts_with(':') => domain.requirements.push(a.to_string()),
-            _ => {
-                return Err(ParseError::new(
-                    file,
-                    r.span(),
-                    format!("expected a requirement `:name`, found {}", r.describe()),
-                ));
-            }
-        }
+        domain.requirements.push(requirement(r, file)?.to_string());
     }
 
     // Types, then a context whose tables know them.
@@ -187,7 +182,11 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
         t: empty_tables,
         object_word: "constant",
     };
-    domain.types = type_decls(&ctx, part(":types").unwrap_or_default())?;
+    domain.types = type_decls(
+        &ctx,
+        part(":types").unwrap_or_default(),
+        &mut domain.warnings,
+    )?;
     ctx.t = Tables::new(file, &domain, &[])?;
 
     domain.constants = ctx.typed_list(
@@ -203,8 +202,13 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
                 file,
                 sig.span,
                 format!(
-                    "`{}` is already declared as a {other} at {}:{}",
+                    "`{}` is already declared as {} {other} at {}:{}",
                     shorten(&sig.name),
+                    if other.starts_with(['a', 'e', 'i', 'o', 'u']) {
+                        "an"
+                    } else {
+                        "a"
+                    },
                     span.line,
                     span.col
                 ),
@@ -328,6 +332,57 @@ fn domain_spellings<'s>(
     sp
 }
 
+/// The requirements of PDDL 3.1 and of HDDL (with `:geometric`, this project's extension);
+/// anything else (`:time-travel`) is refused, so that a typing error in a requirement, or a
+/// requirement of a language htngtp does not read, is said at once.
+pub const KNOWN_REQUIREMENTS: &[&str] = &[
+    ":strips",
+    ":typing",
+    ":negative-preconditions",
+    ":disjunctive-preconditions",
+    ":equality",
+    ":existential-preconditions",
+    ":universal-preconditions",
+    ":quantified-preconditions",
+    ":conditional-effects",
+    ":fluents",
+    ":numeric-fluents",
+    ":object-fluents",
+    ":adl",
+    ":durative-actions",
+    ":duration-inequalities",
+    ":continuous-effects",
+    ":derived-predicates",
+    ":timed-initial-literals",
+    ":preferences",
+    ":constraints",
+    ":action-costs",
+    ":hierarchy",
+    ":method-preconditions",
+    ":geometric",
+];
+
+/// A requirement `:name` of a `:requirements` section: a known one, else an error.
+pub(crate) fn requirement<'s>(r: &'s Sexp, file: &SourceName) -> Result<&'s str> {
+    match r.as_atom() {
+        Some(a) if KNOWN_REQUIREMENTS.contains(&a) => Ok(a),
+        Some(a) if a.starts_with(':') => Err(ParseError::new(
+            file,
+            r.span(),
+            format!(
+                "unknown requirement `{}`; known: {}",
+                shorten(a),
+                KNOWN_REQUIREMENTS.join(" ")
+            ),
+        )),
+        _ => Err(ParseError::new(
+            file,
+            r.span(),
+            format!("expected a requirement `:name`, found {}", r.describe()),
+        )),
+    }
+}
+
 /// Records the spellings of the names of a typed list `a b - t c` (not of its types).
 pub(crate) fn spell_typed(items: &[Sexp], into: &mut Spelling) {
     let mut after_dash = false;
@@ -348,7 +403,7 @@ fn spell_at(item: &Sexp, i: usize, into: &mut Spelling) {
 }
 
 /// `:types` entries `a b - c d - e f`; a type may get several parents over several entries.
-fn type_decls(ctx: &Ctx, items: &[Sexp]) -> Result<Vec<TypeDecl>> {
+fn type_decls(ctx: &Ctx, items: &[Sexp], warnings: &mut Vec<ParseError>) -> Result<Vec<TypeDecl>> {
     let entries = ctx.typed_list_allow_repeats(items)?;
     let mut decls: Vec<TypeDecl> = Vec::new();
     let mut index: HashMap<String, usize> = HashMap::new();
@@ -385,18 +440,29 @@ fn type_decls(ctx: &Ctx, items: &[Sexp]) -> Result<Vec<TypeDecl>> {
             d.parents.retain(|p| p != OBJECT_TYPE);
         }
     }
-    // Parents that are not declared themselves are declared by their use, below `object`.
+    // A parent should be declared itself (`vehicle - object`), or be `object`. A parent named
+    // nowhere else is declared by its use, below `object`, as PDDL planners and the IPC's
+    // parser do (IPC 2020's AssemblyHierarchical relies on it), with a warning: it is often a
+    // typing error.
     let mut implicit = Vec::new();
-    for d in &decls {
-        for p in &d.parents {
-            if p != OBJECT_TYPE && !index.contains_key(p) {
-                index.insert(p.clone(), decls.len() + implicit.len());
-                implicit.push(TypeDecl {
-                    name: p.clone(),
-                    parents: vec![OBJECT_TYPE.to_string()],
-                    span: d.span,
-                });
-            }
+    for e in &entries {
+        if e.ty != OBJECT_TYPE && !index.contains_key(&e.ty) {
+            warnings.push(ctx.err(
+                e.span,
+                format!(
+                    "the parent type `{}` of `{}` is not declared; taken as a subtype of \
+                     `object` (declare it in `:types`, e.g. `{} - object`)",
+                    shorten(&e.ty),
+                    shorten(&e.name),
+                    shorten(&e.ty)
+                ),
+            ));
+            index.insert(e.ty.clone(), decls.len() + implicit.len());
+            implicit.push(TypeDecl {
+                name: e.ty.clone(),
+                parents: vec![OBJECT_TYPE.to_string()],
+                span: e.span,
+            });
         }
     }
     decls.extend(implicit);
@@ -433,7 +499,7 @@ fn functions(ctx: &Ctx, items: &[Sexp]) -> Result<Vec<Signature>> {
 fn task_decl(ctx: &Ctx, item: &Sexp) -> Result<Signature> {
     let items = item.as_list().unwrap_or_default();
     let name_item = ctx.next(items, 1, item.span(), "a task name")?;
-    let name = ctx.name(name_item, "a task name")?;
+    let name = ctx.declared_name(name_item, "a task name")?;
     let owner = format!("task `{}`", shorten(&name));
     let mut params = Vec::new();
     for (key, span, value) in ctx.keyword_pairs(
@@ -469,7 +535,7 @@ const ACTION_KEYS: &[&str] = &[":parameters", ":precondition", ":effect"];
 fn action_signature(ctx: &Ctx, item: &Sexp) -> Result<Signature> {
     let items = item.as_list().unwrap_or_default();
     let name_item = ctx.next(items, 1, item.span(), "an action name")?;
-    let name = ctx.name(name_item, "an action name")?;
+    let name = ctx.declared_name(name_item, "an action name")?;
     let owner = format!("action `{}`", shorten(&name));
     let mut params = Vec::new();
     for (key, _, value) in ctx.keyword_pairs(items, 2, ACTION_KEYS, &owner)? {
@@ -541,7 +607,7 @@ const METHOD_KEYS: &[&str] = &[
 fn method(ctx: &Ctx, item: &Sexp) -> Result<Method> {
     let items = item.as_list().unwrap_or_default();
     let name_item = ctx.next(items, 1, item.span(), "a method name")?;
-    let name = ctx.name(name_item, "a method name")?;
+    let name = ctx.declared_name(name_item, "a method name")?;
     let owner = format!("method `{}`", shorten(&name));
     let pairs = ctx.keyword_pairs(items, 2, METHOD_KEYS, &owner)?;
     let get = |k: &str| {

@@ -54,7 +54,7 @@ impl ParseError {
 impl fmt::Display for ParseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         // The message is documented as one line; keep it so even if a name smuggled a newline in.
-        let message = self.message.replace(['\n', '\r'], " ");
+        let message = crate::text::clip(&self.message);
         if self.line == 0 {
             write!(f, "{}: {}", self.file.display(), message)
         } else {

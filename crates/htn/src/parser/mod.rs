@@ -55,6 +55,18 @@ pub fn load_problem(path: impl AsRef<Path>, domain: &Domain) -> Result<Problem, 
 
 /// The text of a file; a file that is not UTF-8 is an error at the first bad byte.
 fn read_text(path: &Path, source: &SourceName) -> Result<String, ParseError> {
+    // The text is held whole: it must fit in the memory budget, with the tree read from it
+    // (checked as it is read).
+    let len = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    if !crate::budget::fits(len) {
+        return Err(ParseError::whole_file(
+            source,
+            crate::budget::message(
+                crate::planner::Limit::Memory,
+                &format!("reading this file of {} MiB", len >> 20),
+            ),
+        ));
+    }
     let bytes = std::fs::read(path)
         .map_err(|e| ParseError::whole_file(source, format!("cannot read the file: {e}")))?;
     String::from_utf8(bytes).map_err(|e| {

@@ -11,7 +11,7 @@ use super::context::{Ctx, Result, Scope, Tables, is_name, looks_numeric, parse_n
 use super::domain::{define, section};
 use super::error::ParseError;
 use super::formula::Evaluable;
-use super::sexpr::{Sexp, read, shorten};
+use super::sexpr::{Sexp, Tree, read, shorten};
 
 /// Parses a problem of `domain`.
 ///
@@ -23,8 +23,8 @@ pub fn parse_problem(
     source: SourceName,
     domain: &Domain,
 ) -> std::result::Result<Problem, ParseError> {
-    let top = read(text, &source)?;
-    let (items, name, _) = define(&top, "problem", &source)?;
+    let top = Tree(read(text, &source)?);
+    let (items, name, _) = define(&top.0, "problem", &source)?;
     let file = &source;
     let action_sigs: Vec<Signature> = domain
         .actions
@@ -95,12 +95,7 @@ pub fn parse_problem(
         .map(|s| s.1)
         .unwrap_or_default()
     {
-        if !r.as_atom().is_some_and(|a| a.starts_with(':')) {
-            return Err(ctx.err(
-                r.span(),
-                format!("expected a requirement `:name`, found {}", r.describe()),
-            ));
-        }
+        super::domain::requirement(r, ctx.file)?;
     }
 
     // Objects join the domain's constants.
@@ -178,7 +173,10 @@ fn init(ctx: &Ctx, items: &[Sexp]) -> Result<(Vec<InitFact>, Vec<InitValue>)> {
             })
             .collect()
     };
-    for item in items {
+    for (k, item) in items.iter().enumerate() {
+        if k % 4096 == 4095 {
+            ctx.within_budget(item.span(), "reading the initial state")?;
+        }
         let parts = ctx.list(item, "a fact `(p ...)` or a value `(= (f ...) n)`")?;
         let Some(first) = parts.first() else {
             return Err(ctx.err(item.span(), "expected a fact `(p ...)`, found `()`"));

@@ -90,17 +90,92 @@ fn is_delimiter(c: char) -> bool {
     c.is_whitespace() || c == '(' || c == ')' || c == ';'
 }
 
+/// The sections of a domain or problem (`(:action ...`, `(:init ...`): direct children of
+/// `(define ...)`. One met deeper says that the section around it was never closed.
+const SECTIONS: &[&str] = &[
+    ":requirements",
+    ":types",
+    ":constants",
+    ":predicates",
+    ":shared-predicates",
+    ":functions",
+    ":geometric-tasks",
+    ":task",
+    ":method",
+    ":action",
+    ":domain",
+    ":objects",
+    ":htn",
+    ":init",
+    ":goal",
+];
+
+/// A list still open while reading.
+struct Open {
+    /// Its `(`.
+    span: Span,
+    /// Whether its `(` is the first thing on its line (its indentation means something).
+    begins_line: bool,
+    items: Vec<Sexp>,
+}
+
+/// Where the reader thinks a `(` that is never closed was opened, from the first evidence met.
+enum Unclosed {
+    /// A section (`(:method ...`) at `inner` lies inside the section opened at `outer`.
+    Section {
+        outer: Span,
+        inner: Span,
+        head: String,
+    },
+    /// A `(` at `inner`, first on its line, is indented no deeper than the line-opening `(`
+    /// at `outer` that is still open around it.
+    Indent { outer: Span, inner: Span },
+}
+
+/// The s-expressions of a file while it is parsed. Dropped normally, unless a limit of the
+/// process's budget stopped the parsing: then the process is about to end, and freeing
+/// millions of nodes one by one would take longer than the limit's slack.
+pub(crate) struct Tree(pub Vec<Sexp>);
+
+impl Drop for Tree {
+    fn drop(&mut self) {
+        if crate::budget::tripped().is_some() {
+            std::mem::forget(std::mem::take(&mut self.0));
+        }
+    }
+}
+
 /// Reads all top-level s-expressions of `text`.
 pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseError> {
     let mut top: Vec<Sexp> = Vec::new();
-    // Open lists: the span of their `(` and the items read so far.
-    let mut stack: Vec<(Span, Vec<Sexp>)> = Vec::new();
+    let mut stack: Vec<Open> = Vec::new();
     let mut line: u32 = 1;
     let mut col: u32 = 1;
+    let mut at_line_start = true;
+    let mut section_evidence: Option<Unclosed> = None;
+    let mut indent_evidence: Option<Unclosed> = None;
     let mut chars = text.char_indices().peekable();
+    let mut steps: u32 = 0;
 
     while let Some((start, c)) = chars.next() {
         let span = Span { line, col };
+        // The process's budget (time, memory) is checked as the text is read: a huge file
+        // stops at the limit, not after it is read whole.
+        steps = steps.wrapping_add(1);
+        if steps % 4096 == 0
+            && let Some(limit) = crate::budget::check()
+        {
+            // The process stops: what was read is left to it, not freed node by node.
+            std::mem::forget(top);
+            std::mem::forget(stack);
+            return Err(ParseError::new(
+                file,
+                span,
+                crate::budget::message(limit, "reading this file"),
+            ));
+        }
+        let begins_line = at_line_start;
+        at_line_start = c == '\n' || (at_line_start && c.is_whitespace());
         match c {
             '\n' => {
                 line = line.saturating_add(1);
@@ -123,20 +198,38 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
                         format!("parentheses nested deeper than {MAX_DEPTH} levels"),
                     ));
                 }
-                stack.push((span, Vec::new()));
+                if begins_line
+                    && indent_evidence.is_none()
+                    && let Some(outer) = stack.iter().rev().find(|o| o.begins_line)
+                    && outer.span.line < line
+                    && outer.span.col >= col
+                {
+                    indent_evidence = Some(Unclosed::Indent {
+                        outer: outer.span,
+                        inner: span,
+                    });
+                }
+                stack.push(Open {
+                    span,
+                    begins_line,
+                    items: Vec::new(),
+                });
                 col = col.saturating_add(1);
             }
             ')' => {
-                let Some((open, items)) = stack.pop() else {
+                let Some(open) = stack.pop() else {
                     return Err(ParseError::new(
                         file,
                         span,
                         "unexpected `)` with no matching `(`",
                     ));
                 };
-                let list = Sexp::List { items, span: open };
+                let list = Sexp::List {
+                    items: open.items,
+                    span: open.span,
+                };
                 match stack.last_mut() {
-                    Some((_, parent)) => parent.push(list),
+                    Some(parent) => parent.items.push(list),
                     None => top.push(list),
                 }
                 col = col.saturating_add(1);
@@ -185,8 +278,22 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
                     raw: raw.to_string(),
                     span,
                 };
+                // A section's keyword heading a list that lies inside another section.
+                if section_evidence.is_none()
+                    && stack.len() >= 3
+                    && stack.last().is_some_and(|o| o.items.is_empty())
+                    && let Some(Sexp::Atom { text: head, .. }) = Some(&atom)
+                    && SECTIONS.contains(&head.as_str())
+                    && let (Some(outer), Some(inner)) = (stack.get(1), stack.last())
+                {
+                    section_evidence = Some(Unclosed::Section {
+                        outer: outer.span,
+                        inner: inner.span,
+                        head: shorten(raw),
+                    });
+                }
                 match stack.last_mut() {
-                    Some((_, parent)) => parent.push(atom),
+                    Some(parent) => parent.items.push(atom),
                     None => top.push(atom),
                 }
                 col = col.saturating_add(width);
@@ -194,12 +301,56 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
         }
     }
 
-    if let Some((open, _)) = stack.last() {
-        return Err(ParseError::new(
-            file,
-            *open,
-            "this `(` is never closed (end of file reached)",
-        ));
+    if let Some(innermost) = stack.last() {
+        let open = stack.len();
+        // Evidence counts only when it comes after the innermost list left open: a list opened
+        // later and still open (a file cut short) is the better answer.
+        let after = |e: &Unclosed| {
+            let inner = match e {
+                Unclosed::Section { inner, .. } | Unclosed::Indent { inner, .. } => *inner,
+            };
+            (inner.line, inner.col) > (innermost.span.line, innermost.span.col)
+        };
+        let evidence = section_evidence
+            .filter(after)
+            .or(indent_evidence.filter(after));
+        let last_child = innermost.items.iter().rev().find_map(|i| match i {
+            Sexp::List { span, .. } => Some(*span),
+            Sexp::Atom { .. } => None,
+        });
+        let (at, message) = match evidence {
+            Some(Unclosed::Section { outer, inner, head }) => (
+                outer,
+                format!(
+                    "this `(` is never closed: the section `({head}` at {}:{} lies inside it \
+                     (end of file reached with {open} `(` open)",
+                    inner.line, inner.col
+                ),
+            ),
+            Some(Unclosed::Indent { outer, inner }) => (
+                outer,
+                format!(
+                    "this `(` is probably never closed: the `(` at {}:{}, indented like it, \
+                     lies inside it (end of file reached with {open} `(` open)",
+                    inner.line, inner.col
+                ),
+            ),
+            None => match last_child {
+                Some(last) if open == 1 => (
+                    innermost.span,
+                    format!(
+                        "this `(` is never closed (end of file reached), or the list at {}:{}, \
+                         the last in it, lacks its `)`",
+                        last.line, last.col
+                    ),
+                ),
+                _ => (
+                    innermost.span,
+                    "this `(` is never closed (end of file reached)".to_string(),
+                ),
+            },
+        };
+        return Err(ParseError::new(file, at, message));
     }
     Ok(top)
 }
@@ -234,6 +385,38 @@ mod tests {
         assert_eq!((e.line, e.col), (1, 1));
         let e = read("(a))", &file()).unwrap_err();
         assert_eq!((e.line, e.col), (1, 4));
+        // Truncated: the innermost open list.
+        let e = read("(a\n  (b (c", &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (2, 6));
+    }
+
+    /// A missing `)` in the middle of a file is reported where the list that lacks it opens,
+    /// not at the `(define` that the last `)` of the file leaves open.
+    #[test]
+    fn an_unclosed_paren_is_reported_where_it_was_opened() {
+        // Indentation: the second action is indented like the first, yet lies inside it.
+        let text = "(define (domain d)\n  (:action a\n    :parameters (?x\n    :effect (p))\n  (:action b :parameters ()))\n";
+        let e = read(text, &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (2, 3), "{}", e.message);
+        assert!(e.message.contains("5:3"), "{}", e.message);
+        // On one line: a section inside a section.
+        let text = "(define (domain d) (:predicates (p) (:action a :parameters ()))";
+        let e = read(text, &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (1, 20), "{}", e.message);
+        assert!(e.message.contains("`(:action` at 1:37"), "{}", e.message);
+        // Indentation alone: `(q)` is indented like `(p ?x`, yet lies inside it.
+        let text = "(define (domain d)\n  (:predicates\n    (p ?x\n    (q))\n  )\n";
+        let e = read(text, &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (3, 5), "{}", e.message);
+        assert!(
+            e.message.contains("probably never closed: the `(` at 4:5"),
+            "{}",
+            e.message
+        );
+        // Misindented but balanced lists are no evidence: the truly unclosed one is named.
+        let text = "(define (domain d)\n (:method m :subtasks (and\n (a)\n (b)))\n (:action x\n";
+        let e = read(text, &file()).unwrap_err();
+        assert_eq!((e.line, e.col), (5, 2), "{}", e.message);
     }
 
     #[test]

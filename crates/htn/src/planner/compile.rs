@@ -10,7 +10,8 @@ use crate::model::{
     Subtask, Term, TypedName,
 };
 
-use super::PlanError;
+use super::{Limit, PlanError};
+use crate::budget::Watch;
 
 /// A slot (variable) or an object.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,7 +151,11 @@ struct Builder<'a> {
 
 /// Compiles a domain and problem; `Err` names what the model got wrong (the parser normally
 /// catches these first).
-pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, PlanError> {
+pub(crate) fn compile(
+    domain: &Domain,
+    problem: &Problem,
+    watch: &mut Watch,
+) -> Result<Compiled, PlanError> {
     let mut b = Builder {
         c: Compiled {
             objects: Vec::new(),
@@ -180,7 +185,7 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
         type_ids: HashMap::new(),
         domain,
     };
-    b.types_and_objects(problem);
+    b.types_and_objects(problem, watch)?;
     for (shared, list) in [
         (false, &domain.predicates),
         (true, &domain.shared_predicates),
@@ -232,7 +237,12 @@ pub(crate) fn compile(domain: &Domain, problem: &Problem) -> Result<Compiled, Pl
     )?;
     b.c.root_method = b.c.methods.len() as u32;
     b.c.methods.push(root);
-    for f in &problem.init {
+    for (k, f) in problem.init.iter().enumerate() {
+        if k % 4096 == 4095
+            && let Some(limit) = watch.check()
+        {
+            return Err(PlanError::Stopped(limit));
+        }
         let p = b.pred(&f.predicate)?;
         let args = f
             .args
@@ -297,7 +307,7 @@ impl Builder<'_> {
         t
     }
 
-    fn types_and_objects(&mut self, problem: &Problem) {
+    fn types_and_objects(&mut self, problem: &Problem, watch: &mut Watch) -> Result<(), PlanError> {
         self.type_id(OBJECT_TYPE);
         let mut parents: HashMap<String, Vec<String>> = HashMap::new();
         for t in &self.domain.types {
@@ -316,7 +326,12 @@ impl Builder<'_> {
         // (type, object) pairs recorded: a linear `contains` per object was quadratic (160k
         // objects of one type took seconds, past any time limit).
         let mut member: HashSet<(usize, u32)> = HashSet::new();
-        for o in all {
+        for (k, o) in all.into_iter().enumerate() {
+            if k % 4096 == 4095
+                && let Some(limit) = watch.check()
+            {
+                return Err(PlanError::Stopped(limit));
+            }
             let id = match self.c.object_ids.get(&o.name) {
                 Some(&id) => id,
                 None => {
@@ -343,7 +358,14 @@ impl Builder<'_> {
                 seen.push(t);
             }
         }
+        // One flag per (type, object): bounded by the memory limit, not assumed small (10,000
+        // types and a million objects would be 10 GB).
+        let cells = (self.c.type_objects.len() as u64).saturating_mul(self.c.objects.len() as u64);
+        if !watch.fits(cells) {
+            return Err(PlanError::Stopped(Limit::Memory));
+        }
         self.rebuild_membership();
+        Ok(())
     }
 
     fn rebuild_membership(&mut self) {

@@ -209,6 +209,9 @@ pub enum PlanError {
     NoOracle { action: String, task: String },
     #[error(transparent)]
     Oracle(#[from] OracleError),
+    /// A limit passed while compiling (the search would have stopped at once).
+    #[error("stopped: {0} reached while compiling")]
+    Stopped(Limit),
 }
 
 /// Plans `problem` in `domain`. `oracle` answers evaluable predicates; without one, a domain
@@ -222,7 +225,26 @@ pub fn plan<'o>(
     oracle: Option<&'o mut (dyn GeometricOracle + 'o)>,
 ) -> Result<SearchResult, PlanError> {
     let began = std::time::Instant::now();
-    let compiled = compile::compile(domain, problem)?;
+    let mut watch = crate::budget::Watch::new(
+        options.limits.time.map(|t| began + t),
+        options.limits.memory_mb,
+    );
+    let stopped = |limit: Limit| SearchResult {
+        outcome: Outcome::LimitReached { limit },
+        stats: SearchStats {
+            time_s: began.elapsed().as_secs_f64(),
+            peak_memory_kb: current_rss_kb(),
+            ..SearchStats::default()
+        },
+    };
+    let compiled = match compile::compile(domain, problem, &mut watch) {
+        Ok(c) => c,
+        Err(PlanError::Stopped(limit)) => return Ok(stopped(limit)),
+        Err(e) => return Err(e),
+    };
+    if let Some(limit) = watch.check() {
+        return Ok(stopped(limit));
+    }
     if oracle.is_none()
         && let Some(a) = compiled.actions.iter().find(|a| a.evaluable.is_some())
     {
