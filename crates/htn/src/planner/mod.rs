@@ -113,11 +113,19 @@ pub struct PlannerOptions {
     pub duplicate_detection: bool,
     /// Prune tasks decomposed again by an ancestor with no progress (see the module docs).
     pub loop_check: bool,
+    /// Prune a node where a false goal literal's every achiever is barred by a literal that
+    /// can no longer change (`search/guard.rs`). Off only for experiments.
+    #[serde(default = "default_true")]
+    pub goal_guards: bool,
     /// The share of the time limit left to the best-first fallback search (see the module
     /// docs): the depth-first search hands over when it has used the rest without finding a
     /// plan. 0 turns the fallback off; without a time limit there is none.
     #[serde(default = "default_best_first_share")]
     pub best_first_share: f64,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_best_first_share() -> f64 {
@@ -133,6 +141,7 @@ impl Default for PlannerOptions {
             initial_depth_bound: 1024,
             duplicate_detection: true,
             loop_check: true,
+            goal_guards: true,
             best_first_share: default_best_first_share(),
         }
     }
@@ -167,6 +176,10 @@ pub struct SearchStats {
     pub loops_pruned: u64,
     /// Nodes pruned because the remaining tasks cannot achieve a false goal literal.
     pub goal_pruned: u64,
+    /// Goal literals with guarded achievers (see `search/guard.rs`); pruning by them counts
+    /// in `goal_pruned`.
+    #[serde(default)]
+    pub guarded_goals: u32,
     /// Nodes cut off by the task-network length bound.
     pub depth_cutoffs: u64,
     /// Searches run (1 + restarts with a doubled bound).
