@@ -20,13 +20,19 @@
 //! Pruning that loses no plan (all of it sound):
 //! - *precondition pull-up* (`compile`): a method's precondition gains its first subtask's
 //!   precondition (evaluated in the same state) and the static literals of all its primitive
-//!   subtasks, climbing through single-method tasks, so bindings fail early and bind through
-//!   static facts (indexed by argument);
+//!   subtasks, climbing through abstract tasks (a task requires what every one of its methods
+//!   requires over its arguments), so bindings fail early and bind through static facts
+//!   (indexed by argument);
 //! - *goal relevance* (`search`): each suffix of the task network carries the set of goal
 //!   literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
 //!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
-//!   achiever (a parameterless action) must be achieved while that literal is false.
+//!   achiever (a parameterless action) must be achieved while that literal is false;
+//! - *guarded achievers* (`search/guard.rs`): after an action made a goal literal false (or
+//!   changed a fact that guards one), the literal must still be reachable from a task of the
+//!   network through methods whose literals over facts that can only be deleted (or only
+//!   added) still hold; else the node is a dead end (Multiarm-Blocksworld's consumed
+//!   `goal_on` markers).
 //!
 //! Fallback: with a time limit, on a purely symbolic problem, the depth-first search gets the
 //! first `1 - best_first_share` of the time; if it has found no plan by then, a weighted
