@@ -391,6 +391,34 @@ impl State {
         }
     }
 
+    /// The facts changed since trail mark `mark` (a fact changed twice comes twice).
+    pub fn changed_since(&self, mark: usize) -> impl Iterator<Item = u32> + '_ {
+        self.trail[mark.min(self.trail.len())..]
+            .iter()
+            .filter_map(|c| match *c {
+                Change::Added(id) | Change::Deleted(id) => Some(id),
+                Change::Fluent(..) => None,
+            })
+    }
+
+    /// The watched literal (index given to [`State::watch`]) that fact `id` makes true, if any.
+    #[inline]
+    pub fn watched_pos(&self, id: u32) -> Option<u32> {
+        self.watch_pos
+            .get(id as usize)
+            .copied()
+            .filter(|&i| i != u32::MAX)
+    }
+
+    /// The watched literal that fact `id` makes false, if any.
+    #[inline]
+    pub fn watched_neg(&self, id: u32) -> Option<u32> {
+        self.watch_neg
+            .get(id as usize)
+            .copied()
+            .filter(|&i| i != u32::MAX)
+    }
+
     /// Forgets the trail (after setting up the initial state).
     pub fn commit(&mut self) {
         self.trail.clear();

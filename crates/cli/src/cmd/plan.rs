@@ -66,6 +66,9 @@ pub struct Args {
     /// Turn off the left-recursion check (for experiments).
     #[arg(long, hide = true)]
     pub no_loop_check: bool,
+    /// Turn off the pruning by guarded goal achievers (for experiments).
+    #[arg(long, hide = true)]
+    pub no_goal_guards: bool,
     /// With --time-limit, on problems without geometric tasks: the share of the time left to
     /// the best-first fallback search once the depth-first search has used the rest without a
     /// plan (0 turns the fallback off, 1 starts with it).
@@ -137,6 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         },
         duplicate_detection: !args.no_duplicate_detection,
         loop_check: !args.no_loop_check,
+        goal_guards: !args.no_goal_guards,
         best_first_share: args.best_first_share,
         ..PlannerOptions::default()
     };

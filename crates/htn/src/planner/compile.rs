@@ -733,9 +733,10 @@ fn static_predicates(c: &Compiled) -> Vec<bool> {
 /// - from every other subtask, the static literals it requires (static facts hold or fail for
 ///   the whole plan).
 ///
-/// What an abstract task requires is what its only method requires over the task's arguments
-/// (tasks with several methods give nothing), so requirements climb through chains of
-/// single-method tasks; this runs to a fixpoint. All of it is sound and loses no plan; it
+/// What an abstract task requires is what all its methods require over the task's arguments
+/// (the literals common to every method: the only method's whole precondition, or, say, the
+/// `(not (isOccupied ?p))` that every way of connecting a port needs), so requirements climb
+/// through the hierarchy; this runs to a fixpoint. All of it is sound and loses no plan; it
 /// prunes bindings early and lets the binder bind through the pulled atoms.
 fn pull_up(c: &mut Compiled) {
     let stat = c.static_preds.clone();
@@ -764,30 +765,20 @@ fn pull_up(c: &mut Compiled) {
                         req[t].push((lit.f.clone(), is_static(&lit.f)));
                     }
                 }
-            } else if let [m] = task.methods[..] {
-                let m = &c.methods[m as usize];
-                // Slot to argument position.
-                let pos: Vec<CTerm> = (0..m.slot_types.len())
-                    .map(|s| {
-                        m.task_args
-                            .iter()
-                            .position(|t| *t == CTerm::Var(s as u16))
-                            .map_or(CTerm::Obj(u32::MAX), |k| CTerm::Var(k as u16))
-                    })
-                    .collect();
-                for lit in &m.pre {
-                    if !quantifier_free(&lit.f)
-                        || lit
-                            .vars
-                            .iter()
-                            .any(|&v| pos[v as usize] == CTerm::Obj(u32::MAX))
-                    {
-                        continue;
-                    }
-                    if let Some(f) = rename(&lit.f, &pos) {
-                        req[t].push((f, is_static(&lit.f)));
+            } else if !task.methods.is_empty() {
+                // A task requires what every one of its methods requires over its arguments.
+                let mut common: Option<Vec<(CFormula, bool)>> = None;
+                for &m in &task.methods {
+                    let mine = method_requires(&c.methods[m as usize], &is_static);
+                    common = Some(match common {
+                        None => mine,
+                        Some(prev) => prev.into_iter().filter(|x| mine.contains(x)).collect(),
+                    });
+                    if common.as_ref().is_some_and(Vec::is_empty) {
+                        break;
                     }
                 }
+                req[t] = common.unwrap_or_default();
             }
         }
         let mut changed = false;
@@ -825,6 +816,37 @@ fn pull_up(c: &mut Compiled) {
             break;
         }
     }
+}
+
+/// What method `m`'s precondition requires over its task's argument positions (the
+/// quantifier-free literals over slots that are task arguments), with their static flag.
+fn method_requires(m: &CMethod, is_static: &dyn Fn(&CFormula) -> bool) -> Vec<(CFormula, bool)> {
+    // Slot to argument position.
+    let pos: Vec<CTerm> = (0..m.slot_types.len())
+        .map(|s| {
+            m.task_args
+                .iter()
+                .position(|t| *t == CTerm::Var(s as u16))
+                .map_or(CTerm::Obj(u32::MAX), |k| CTerm::Var(k as u16))
+        })
+        .collect();
+    let mut out = Vec::new();
+    for lit in &m.pre {
+        if !quantifier_free(&lit.f)
+            || lit
+                .vars
+                .iter()
+                .any(|&v| pos[v as usize] == CTerm::Obj(u32::MAX))
+        {
+            continue;
+        }
+        if let Some(f) = rename(&lit.f, &pos)
+            && !out.iter().any(|(g, _)| *g == f)
+        {
+            out.push((f, is_static(&lit.f)));
+        }
+    }
+    out
 }
 
 fn quantifier_free(f: &CFormula) -> bool {

@@ -20,13 +20,19 @@
 //! Pruning that loses no plan (all of it sound):
 //! - *precondition pull-up* (`compile`): a method's precondition gains its first subtask's
 //!   precondition (evaluated in the same state) and the static literals of all its primitive
-//!   subtasks, climbing through single-method tasks, so bindings fail early and bind through
-//!   static facts (indexed by argument);
+//!   subtasks, climbing through abstract tasks (a task requires what every one of its methods
+//!   requires over its arguments), so bindings fail early and bind through static facts
+//!   (indexed by argument);
 //! - *goal relevance* (`search`): each suffix of the task network carries the set of goal
 //!   literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
 //!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
-//!   achiever (a parameterless action) must be achieved while that literal is false.
+//!   achiever (a parameterless action) must be achieved while that literal is false;
+//! - *guarded achievers* (`search/guard.rs`): after an action made a goal literal false (or
+//!   changed a fact that guards one), the literal must still be reachable from a task of the
+//!   network through methods whose literals over facts that can only be deleted (or only
+//!   added) still hold; else the node is a dead end (Multiarm-Blocksworld's consumed
+//!   `goal_on` markers).
 //!
 //! Fallback: with a time limit, on a purely symbolic problem, the depth-first search gets the
 //! first `1 - best_first_share` of the time; if it has found no plan by then, a weighted
@@ -113,11 +119,19 @@ pub struct PlannerOptions {
     pub duplicate_detection: bool,
     /// Prune tasks decomposed again by an ancestor with no progress (see the module docs).
     pub loop_check: bool,
+    /// Prune a node where a false goal literal's every achiever is barred by a literal that
+    /// can no longer change (`search/guard.rs`). Off only for experiments.
+    #[serde(default = "default_true")]
+    pub goal_guards: bool,
     /// The share of the time limit left to the best-first fallback search (see the module
     /// docs): the depth-first search hands over when it has used the rest without finding a
     /// plan. 0 turns the fallback off; without a time limit there is none.
     #[serde(default = "default_best_first_share")]
     pub best_first_share: f64,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_best_first_share() -> f64 {
@@ -133,6 +147,7 @@ impl Default for PlannerOptions {
             initial_depth_bound: 1024,
             duplicate_detection: true,
             loop_check: true,
+            goal_guards: true,
             best_first_share: default_best_first_share(),
         }
     }
@@ -167,6 +182,10 @@ pub struct SearchStats {
     pub loops_pruned: u64,
     /// Nodes pruned because the remaining tasks cannot achieve a false goal literal.
     pub goal_pruned: u64,
+    /// Goal literals with guarded achievers (see `search/guard.rs`); pruning by them counts
+    /// in `goal_pruned`.
+    #[serde(default)]
+    pub guarded_goals: u32,
     /// Nodes cut off by the task-network length bound.
     pub depth_cutoffs: u64,
     /// Searches run (1 + restarts with a doubled bound).

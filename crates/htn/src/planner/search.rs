@@ -16,6 +16,7 @@ use super::{
 };
 
 mod bfs;
+mod guard;
 
 const NIL: u32 = u32::MAX;
 
@@ -282,6 +283,8 @@ pub(crate) struct Search<'a, 'o> {
     lifted_masks: Vec<u32>,
     /// When (since the start) the depth-first search hands over to the best-first search.
     switch_at: Option<std::time::Duration>,
+    /// Goal literals' guarded achievers (`guard.rs`), when some goal literal has any.
+    guards: Option<guard::Guards>,
 }
 
 /// Interned bitsets over the goal literals, with memoised unions (cells share them).
@@ -369,6 +372,11 @@ impl<'a, 'o> Search<'a, 'o> {
         state.commit();
         state.index_static(&c.static_preds);
         state.watch(&c.goal_lits);
+        let guards = if opts.goal_guards {
+            guard::Guards::build(c, &mut state)
+        } else {
+            None
+        };
         let words = c.goal_lits.len().div_ceil(64);
         let mut masks = MaskTable::new(words);
         let lifted_masks = c.task_goal_mask.iter().map(|m| masks.intern(m)).collect();
@@ -389,7 +397,6 @@ impl<'a, 'o> Search<'a, 'o> {
             cutoff: false,
             geo_capped: false,
             loop_check: opts.loop_check,
-            stats: SearchStats::default(),
             start: Instant::now(),
             next_memory_check: Instant::now(),
             memory_reached: false,
@@ -402,6 +409,11 @@ impl<'a, 'o> Search<'a, 'o> {
             masks,
             lifted_masks,
             switch_at: fallback_time(c, opts),
+            stats: SearchStats {
+                guarded_goals: guards.as_ref().map_or(0, guard::Guards::count),
+                ..SearchStats::default()
+            },
+            guards,
         })
     }
 
@@ -1252,7 +1264,12 @@ impl<'a, 'o> Search<'a, 'o> {
         if !ev.effects(&act.effects, &mut slots, &mut self.effects) {
             return Ok(false);
         }
+        let mark = self.state.mark();
         self.effects.apply(&mut self.state);
+        if self.guards.is_some() && !self.guarded_goals_alive(mark, cell.next) {
+            self.stats.goal_pruned += 1;
+            return Ok(false);
+        }
         self.steps.push(Step {
             occ: cell.occ,
             task: cell.task,
