@@ -1,6 +1,6 @@
 //! Effort levels: how much an agent must move to see or reach something.
 //!
-//! From the original mightability-map work (facts file, section 3), least effort first:
+//! From the original mightability-map work (`../shared/notes/geometry-facts.md` beside the checkout, section 3), least effort first:
 //!
 //! | level | to see | to reach |
 //! |---|---|---|

@@ -1,4 +1,4 @@
-//! Shared literals: the symbolic facts a world makes true (facts file, section 7).
+//! Shared literals: the symbolic facts a world makes true (`../shared/notes/geometry-facts.md` beside the checkout, section 7).
 //!
 //! * `visible(o, a)` with the least effort level at which agent `a` sees at least
 //!   [`FactParams::vis_threshold`] of object `o`'s pixels ([`crate::visibility`]): level 0 with the

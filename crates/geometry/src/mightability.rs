@@ -1,5 +1,5 @@
 //! Mightability maps: per agent, 3D grids of where it can see and reach at each effort level
-//! (facts file, section 4).
+//! (`../shared/notes/geometry-facts.md` beside the checkout, section 4).
 //!
 //! The grid covers the scene's `bounds` (or the world's bounds with a margin) in cubic cells
 //! (5 cm by default). Each cell stores, per agent, the least effort level at which the agent

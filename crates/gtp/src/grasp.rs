@@ -1,6 +1,6 @@
 //! Grasps for the PR2 parallel gripper: antipodal contact pairs inside a friction cone,
 //! several rotations about each pair's axis, filtered for collision with the object itself,
-//! ranked and cached per object shape (`shared/notes/geometry-facts.md` section 5).
+//! ranked and cached per object shape (`../shared/notes/geometry-facts.md` beside the checkout, section 5).
 //!
 //! A [`Grasp`] is the pose of the gripper's tool frame relative to the object, plus the jaw
 //! opening. Grasps depend only on the object's shape, so they are computed once per shape and

@@ -3,7 +3,7 @@
 //! Convention (as the PR2's `r_gripper_tool_frame`): x points forward out of the palm (the
 //! approach direction), y is the axis along which the two fingers close, z completes the frame.
 //! The tool frame sits between the fingertips, 0.18 m ahead of the palm frame
-//! (`shared/notes/geometry-facts.md` section 1).
+//! (`../shared/notes/geometry-facts.md` beside the checkout, section 1).
 
 use parry3d::math::{Pose, Vector};
 use parry3d::query;

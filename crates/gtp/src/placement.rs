@@ -1,6 +1,6 @@
 //! Placements: the stable resting faces of an object's convex hull, turned by several yaw
 //! angles and set down at candidate points on support surfaces
-//! (`shared/notes/geometry-facts.md` section 5, point 2).
+//! (`../shared/notes/geometry-facts.md` beside the checkout, section 5, point 2).
 //!
 //! A face is stable when the object's centre of mass, projected onto the face's plane, lies
 //! inside the face; the distance from that projection to the face's nearest edge is the

@@ -1,7 +1,7 @@
 //! The paper's geometric tasks and their constraints.
 //!
 //! Each task is a set of constraints with thresholds that have defaults and can be set per
-//! call ([`Constraints`]). Defaults follow `shared/notes/geometry-facts.md` section 6 and the
+//! call ([`Constraints`]). Defaults follow `../shared/notes/geometry-facts.md` (beside the checkout) section 6 and the
 //! paper's experiment.
 
 use std::fmt;

@@ -1,4 +1,4 @@
-//! The fallback search: greedy best-first progression over search nodes (state, task
+//! The fallback search: weighted A* (best-first) progression over search nodes (state, task
 //! network), as in pandaPI's progression search. A node's successors are those of its first
 //! task: the action applied, or every method and binding that applies. Each (state, network)
 //! pair is generated once (duplicate detection). The heuristic is the network's least number
@@ -257,7 +257,7 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
-    /// The greedy best-first search, until a plan, exhaustion or a limit of the options.
+    /// The weighted A* search, until a plan, exhaustion or a limit of the options.
     pub(super) fn best_first(&mut self) -> Stop {
         let c = self.c;
         self.reset();
