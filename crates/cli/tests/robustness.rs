@@ -645,4 +645,24 @@ fn limits_stop_reading_and_parsing_with_exit_2() {
         "{}",
         stderr(&o)
     );
+    // bench-hddl counts such a child as stopped at its limit, not as a crash.
+    let folder = dir.join("bench").join("tiny");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::copy(&d, folder.join("domain.hddl")).unwrap();
+    std::fs::copy(&big, folder.join("p01.hddl")).unwrap();
+    let csv = dir.join("bench.csv");
+    let o = run(
+        &[
+            "bench-hddl",
+            s(&dir.join("bench")),
+            "--time-limit",
+            "0.000001",
+            "--csv",
+            s(&csv),
+        ],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    assert!(rows.contains("\ntiny,p01.hddl,limit-reached,"), "{rows}");
 }

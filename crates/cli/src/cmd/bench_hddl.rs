@@ -205,10 +205,11 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
     let v: serde_json::Value = match serde_json::from_str(stdout.trim()) {
         Ok(v) => v,
         Err(_) => {
-            row.status = if status.code() == Some(exit::BAD_INPUT as i32) {
-                "bad-input".into()
-            } else {
-                "crash".into()
+            row.status = match status.code().and_then(|c| u8::try_from(c).ok()) {
+                Some(exit::BAD_INPUT) => "bad-input".into(),
+                // A limit passed while reading, parsing, compiling or validating: no JSON.
+                Some(exit::LIMIT) => "limit-reached".into(),
+                _ => "crash".into(),
             };
             row.message = stderr
                 .lines()
