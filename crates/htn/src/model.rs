@@ -136,6 +136,19 @@ pub enum ArithOp {
     Div,
 }
 
+impl ArithOp {
+    /// `a op b`: the one arithmetic of numeric fluents, for the planner and the validator.
+    /// `None` for a division by zero: the value is undefined, as an undefined fluent's is.
+    pub fn apply(self, a: f64, b: f64) -> Option<f64> {
+        match self {
+            ArithOp::Add => Some(a + b),
+            ArithOp::Sub => Some(a - b),
+            ArithOp::Mul => Some(a * b),
+            ArithOp::Div => (b != 0.0).then(|| a / b),
+        }
+    }
+}
+
 /// A numeric expression (PDDL 2.1).
 #[derive(Clone, Debug, PartialEq)]
 pub enum NumExpr {
@@ -193,6 +206,21 @@ pub enum NumericEffectOp {
     Decrease,
     ScaleUp,
     ScaleDown,
+}
+
+impl NumericEffectOp {
+    /// A fluent's new value from its current one and the effect's operand `x`. `None` for a
+    /// scale-down by zero. (An undefined current value is the caller's to refuse: only
+    /// `Assign` may set a fluent that has no value.)
+    pub fn apply(self, current: f64, x: f64) -> Option<f64> {
+        match self {
+            NumericEffectOp::Assign => Some(x),
+            NumericEffectOp::Increase => Some(current + x),
+            NumericEffectOp::Decrease => Some(current - x),
+            NumericEffectOp::ScaleUp => Some(current * x),
+            NumericEffectOp::ScaleDown => (x != 0.0).then(|| current / x),
+        }
+    }
 }
 
 /// One effect of an action.
@@ -315,4 +343,19 @@ pub struct Problem {
     pub goal: Formula,
     /// How the file spells its objects (the other namespaces stay empty).
     pub spelling: Spellings,
+}
+
+#[cfg(test)]
+mod arithmetic_tests {
+    use super::{ArithOp, NumericEffectOp};
+
+    #[test]
+    fn division_and_scale_down_by_zero_are_undefined() {
+        assert_eq!(ArithOp::Div.apply(6.0, 3.0), Some(2.0));
+        assert_eq!(ArithOp::Div.apply(6.0, 0.0), None);
+        assert_eq!(NumericEffectOp::ScaleDown.apply(6.0, 0.0), None);
+        assert_eq!(NumericEffectOp::Decrease.apply(6.0, 2.0), Some(4.0));
+        // Assigning needs no current value.
+        assert_eq!(NumericEffectOp::Assign.apply(f64::NAN, 1.0), Some(1.0));
+    }
 }

@@ -23,8 +23,8 @@ use std::collections::{HashMap, HashSet};
 use std::hash::BuildHasherDefault;
 
 use crate::model::{
-    ArithOp, CompareOp, Domain, Effect, Formula, Method, NumExpr, NumericEffectOp, OBJECT_TYPE,
-    Problem, Term, TypedName,
+    CompareOp, Domain, Effect, Formula, Method, NumExpr, NumericEffectOp, OBJECT_TYPE, Problem,
+    Term, TypedName,
 };
 use crate::oracle::GroundAtom;
 use crate::plan::Plan;
@@ -625,17 +625,7 @@ impl<'a> World<'a> {
             NumExpr::Fluent(f) => *st.values.get(&self.ground(&f.function, &f.args, env)?)?,
             NumExpr::Binary(op, a, b) => {
                 let (a, b) = (self.num(st, a, env)?, self.num(st, b, env)?);
-                match op {
-                    ArithOp::Add => a + b,
-                    ArithOp::Sub => a - b,
-                    ArithOp::Mul => a * b,
-                    ArithOp::Div => {
-                        if b == 0.0 {
-                            return None;
-                        }
-                        a / b
-                    }
-                }
+                op.apply(a, b)?
             }
             NumExpr::Neg(a) => -self.num(st, a, env)?,
         })
@@ -891,15 +881,7 @@ impl<'a> World<'a> {
                         (_, None) => {
                             return Err(format!("effect on undefined fluent ({})", k.join(" ")));
                         }
-                        (NumericEffectOp::Increase, Some(c)) => c + x,
-                        (NumericEffectOp::Decrease, Some(c)) => c - x,
-                        (NumericEffectOp::ScaleUp, Some(c)) => c * x,
-                        (NumericEffectOp::ScaleDown, Some(c)) => {
-                            if x == 0.0 {
-                                return Err("scale-down by zero".into());
-                            }
-                            c / x
-                        }
+                        (_, Some(c)) => op.apply(c, x).ok_or("scale-down by zero")?,
                     };
                     values.push((k, v));
                 }

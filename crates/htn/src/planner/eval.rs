@@ -6,7 +6,7 @@
 //! binding through the positive atom with the fewest candidate facts, then through equalities,
 //! and only as a last resort enumerates the objects of a slot's type.
 
-use crate::model::{ArithOp, CompareOp, NumericEffectOp};
+use crate::model::CompareOp;
 use crate::state::State;
 
 use super::compile::{CEffect, CFormula, CLit, CNum, CTerm, Compiled};
@@ -55,18 +55,7 @@ impl Eval<'_> {
             CNum::Fluent(f, args) => with_key(*f, args, b, |k| self.s.value(k)),
             CNum::Bin(op, x, y) => {
                 let (x, y) = (self.num(x, b), self.num(y, b));
-                match op {
-                    ArithOp::Add => x + y,
-                    ArithOp::Sub => x - y,
-                    ArithOp::Mul => x * y,
-                    ArithOp::Div => {
-                        if y == 0.0 {
-                            f64::NAN
-                        } else {
-                            x / y
-                        }
-                    }
-                }
+                op.apply(x, y).unwrap_or(f64::NAN)
             }
             CNum::Neg(x) => -self.num(x, b),
         }
@@ -318,19 +307,8 @@ impl Eval<'_> {
                 CEffect::Num(op, f, args, e) => {
                     let cur = with_key(*f, args, b, |k| self.s.value(k));
                     let x = self.num(e, b);
-                    let v = match op {
-                        NumericEffectOp::Assign => x,
-                        NumericEffectOp::Increase => cur + x,
-                        NumericEffectOp::Decrease => cur - x,
-                        NumericEffectOp::ScaleUp => cur * x,
-                        NumericEffectOp::ScaleDown => {
-                            if x == 0.0 {
-                                f64::NAN
-                            } else {
-                                cur / x
-                            }
-                        }
-                    };
+                    // NaN (undefined) stays NaN, except where assigned.
+                    let v = op.apply(cur, x).unwrap_or(f64::NAN);
                     if v.is_nan() {
                         return false;
                     }
