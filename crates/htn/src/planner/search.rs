@@ -246,6 +246,16 @@ enum Stop {
     Limit(Limit),
 }
 
+/// What [`Search::may_achieve`] knows of a ground task's goal mask.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MayAchieve {
+    Unknown,
+    /// Being computed (a recursive call met it again: the lifted mask stands in).
+    Computing,
+    /// The id of its goal mask.
+    Known(u32),
+}
+
 pub(crate) struct Search<'a, 'o> {
     c: &'a Compiled,
     opts: PlannerOptions,
@@ -276,8 +286,8 @@ pub(crate) struct Search<'a, 'o> {
     forced: VecDeque<Key>,
     repair: Option<Repair>,
     salt: u64,
-    /// Per (partially) ground task: 0 unknown, 1 being computed, 2 known; and its goal mask.
-    may_memo: Vec<(u8, u32)>,
+    /// Per (partially) ground task, the goal mask it may achieve ([`Search::may_achieve`]).
+    may_memo: Vec<MayAchieve>,
     masks: MaskTable,
     /// Per task, the id of its lifted goal mask.
     lifted_masks: Vec<u32>,
@@ -698,18 +708,18 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         let n = self.gtasks.len();
         if self.may_memo.len() < n {
-            self.may_memo.resize(n, (0, 0));
+            self.may_memo.resize(n, MayAchieve::Unknown);
         }
         let c = self.c;
         let key = self.gtasks.key(gt).to_vec();
         let t = key[0] as usize;
         let lifted = self.lifted_masks[t];
         match self.may_memo[gt as usize] {
-            (2, m) => return m,
-            (1, _) => return lifted,
-            _ => {}
+            MayAchieve::Known(m) => return m,
+            MayAchieve::Computing => return lifted,
+            MayAchieve::Unknown => {}
         }
-        self.may_memo[gt as usize] = (1, 0);
+        self.may_memo[gt as usize] = MayAchieve::Computing;
         let args = &key[1..];
         let mut m = vec![0u64; self.masks.words];
         if let Some(a) = c.tasks[t].action {
@@ -791,9 +801,9 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         let id = self.masks.intern(&m);
         if self.may_memo.len() <= gt as usize {
-            self.may_memo.resize(gt as usize + 1, (0, 0));
+            self.may_memo.resize(gt as usize + 1, MayAchieve::Unknown);
         }
-        self.may_memo[gt as usize] = (2, id);
+        self.may_memo[gt as usize] = MayAchieve::Known(id);
         id
     }
 
