@@ -415,6 +415,54 @@ fn a_scene_that_starts_in_collision_is_refused_by_name() {
     assert!(e.contains("starts inside `desk`"), "{e}");
 }
 
+/// Two books that start inside one another are refused by name; `--allow-initial-contact`
+/// reads the scene with a warning, but never a robot inside furniture.
+#[test]
+fn allow_initial_contact_reads_overlapping_objects_with_a_warning() {
+    let dir = scratch("allow-contact");
+    let books = library_scene_edited(
+        &dir,
+        "pose = { xyz = [-0.68, -0.86, 0.8602], rpy = [0, 90, -8] }",
+        "pose = { xyz = [-0.48, -0.62, 0.8602], rpy = [0, 90, -8] }",
+    );
+    let refused = run(&["facts", s(&books)], Stdio::piped());
+    assert_eq!(code(&refused), 3, "{}", stderr(&refused));
+    assert!(stderr(&refused).contains("`white-book` starts inside `grey-book`"));
+    let allowed = run(
+        &["facts", s(&books), "--allow-initial-contact"],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&allowed), 0, "{}", stderr(&allowed));
+    assert!(
+        stderr(&allowed).contains("warning: "),
+        "{}",
+        stderr(&allowed)
+    );
+    assert!(stderr(&allowed).contains("--allow-initial-contact"));
+
+    let robot = library_scene_edited(
+        &dir,
+        "base = { x = -0.72, y = 0.0, yaw = 0 }",
+        "base = { x = 0.0, y = 0.0, yaw = 0 }",
+    );
+    let o = run(
+        &[
+            "gtp",
+            s(&robot),
+            "pick",
+            "grey-book",
+            "--allow-initial-contact",
+        ],
+        Stdio::piped(),
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("starts inside `desk`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// The tiny domain with `from` replaced by `to`, written to `dir/name`.
 fn tiny_domain_edited(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
     let (d, _) = tiny_problem(dir);

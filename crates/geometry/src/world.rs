@@ -168,9 +168,33 @@ impl World {
         World::from_scene(Scene::load(path)?)
     }
 
+    /// Loads a scene as [`World::load`] does, but objects that start inside one another are a
+    /// warning (returned), not an error: `--allow-initial-contact`. A robot's base inside an
+    /// object stays an error.
+    pub fn load_allowing_contact(
+        path: impl AsRef<Path>,
+    ) -> Result<(World, Option<SceneError>), SceneError> {
+        let world = World::unchecked(Scene::load(path)?)?;
+        if let Some(e) = world.robot_overlap() {
+            return Err(e);
+        }
+        let warning = world.object_overlap();
+        Ok((world, warning))
+    }
+
     /// Builds the initial world of a loaded scene: loads each agent's URDF, checks the joint and
-    /// link names the scene uses, and applies the scene's posture.
+    /// link names the scene uses, applies the scene's posture, and refuses a world that starts
+    /// in collision ([`World::initial_overlap`]).
     pub fn from_scene(scene: Scene) -> Result<World, SceneError> {
+        let world = World::unchecked(scene)?;
+        match world.initial_overlap() {
+            Some(e) => Err(e),
+            None => Ok(world),
+        }
+    }
+
+    /// [`World::from_scene`] without the check for initial collisions.
+    fn unchecked(scene: Scene) -> Result<World, SceneError> {
         let mut infos = Vec::with_capacity(scene.agents.len());
         let mut states = Vec::with_capacity(scene.agents.len());
         for (i, spec) in scene.agents.iter().enumerate() {
@@ -305,10 +329,7 @@ impl World {
             attachments: vec![None; n],
             agents: states,
         };
-        match world.initial_overlap() {
-            Some(e) => Err(e),
-            None => Ok(world),
-        }
+        Ok(world)
     }
 
     /// The first overlap deeper than [`CONTACT_TOLERANCE_M`] between a movable object and
@@ -318,19 +339,17 @@ impl World {
     /// without saying why. Furniture may overlap furniture (walls joined at a corner), and
     /// people are not checked (a seated person's model rests in the chair).
     fn initial_overlap(&self) -> Option<SceneError> {
+        self.object_overlap().or_else(|| self.robot_overlap())
+    }
+
+    /// The first overlap between a movable object and another object (see
+    /// [`World::initial_overlap`]).
+    fn object_overlap(&self) -> Option<SceneError> {
         let bodies = self.bodies();
         let objects: Vec<&Body<'_>> = bodies
             .iter()
             .filter(|b| matches!(b.owner, BodyOwner::Object(_)))
             .collect();
-        let bases: Vec<Vec<bool>> = self
-            .agent_ids()
-            .map(|a| base_links(&self.agent(a).model))
-            .collect();
-        let robot_links = bodies.iter().filter(|b| {
-            matches!(b.owner, BodyOwner::Agent(a, l)
-                if self.agent(a).kind() == AgentKind::Robot && bases[a.0][l])
-        });
         let movable =
             |b: &Body<'_>| matches!(b.owner, BodyOwner::Object(id) if self.object(id).movable);
         // Object pairs: the first overlap in the file's order (the pair (i, j), i < j, least;
@@ -370,9 +389,25 @@ impl World {
                 }
             }
         }
-        if let Some((lo, hi, depth)) = first {
-            return Some(self.overlap_error(objects[hi], objects[lo], depth));
-        }
+        first.map(|(lo, hi, depth)| self.overlap_error(objects[hi], objects[lo], depth))
+    }
+
+    /// The first overlap between a robot's base and an object (see
+    /// [`World::initial_overlap`]).
+    fn robot_overlap(&self) -> Option<SceneError> {
+        let bodies = self.bodies();
+        let objects: Vec<&Body<'_>> = bodies
+            .iter()
+            .filter(|b| matches!(b.owner, BodyOwner::Object(_)))
+            .collect();
+        let bases: Vec<Vec<bool>> = self
+            .agent_ids()
+            .map(|a| base_links(&self.agent(a).model))
+            .collect();
+        let robot_links = bodies.iter().filter(|b| {
+            matches!(b.owner, BodyOwner::Agent(a, l)
+                if self.agent(a).kind() == AgentKind::Robot && bases[a.0][l])
+        });
         robot_links
             .flat_map(|l| objects.iter().map(move |o| (l, *o)))
             .find_map(|(a, b)| Some((a, b, penetration(a, b)?)))

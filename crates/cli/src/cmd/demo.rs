@@ -70,7 +70,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         &domain,
         &problem,
         began,
-        &dir.join("scene.toml"),
+        crate::cmd::geo::SceneInput {
+            path: &dir.join("scene.toml"),
+            allow_initial_contact: false,
+        },
         PlannerOptions {
             seed: args.seed,
             strategy: Strategy::GeometricFirst { k: 3 },

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use geometry::effort::MAX_EFFORT;
 use geometry::facts::{FactParams, effort_table, relations};
 use geometry::mightability::{Mightability, MightabilityParams};
-use geometry::world::World;
 use serde::Serialize;
 
 /// Arguments of `htngtp facts`.
@@ -24,6 +23,10 @@ use serde::Serialize;
 pub struct Args {
     /// The scene file (TOML).
     pub scene: PathBuf,
+    /// Read the scene even when objects start inside one another (a warning then, not an
+    /// error); a robot inside furniture is still refused.
+    #[arg(long)]
+    pub allow_initial_contact: bool,
     /// Print JSON: a list of {predicate, args, effort}.
     #[arg(long)]
     pub json: bool,
@@ -65,7 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         eprintln!("error: --resolution must be between 1 and 1024");
         return Ok(crate::exit::BAD_INPUT);
     }
-    let world = match World::load(&args.scene) {
+    let world = match crate::cmd::geo::load_world(&args.scene, args.allow_initial_contact) {
         Ok(w) => w,
         Err(e) => {
             eprintln!("error: {e}");

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use geometry::render::{Camera, agent_camera, render};
-use geometry::scene::AgentKind;
+use geometry::scene::{AgentKind, SceneError};
 use geometry::world::World;
 use gtp::solution::SolutionSummary;
 use htn::model::{Domain, Problem};
@@ -26,27 +26,53 @@ pub struct Outputs {
     pub png_dir: Option<PathBuf>,
 }
 
+/// A scene file to read, and whether objects that start inside one another may be read with a
+/// warning (`--allow-initial-contact`).
+pub struct SceneInput<'a> {
+    pub path: &'a Path,
+    pub allow_initial_contact: bool,
+}
+
+/// Loads a scene; with `allow_contact`, objects that start inside one another are a warning
+/// on standard error (`--allow-initial-contact`), not an error. A robot inside furniture
+/// stays an error.
+pub fn load_world(path: &Path, allow_contact: bool) -> Result<World, SceneError> {
+    if !allow_contact {
+        return World::load(path);
+    }
+    let (world, warning) = World::load_allowing_contact(path)?;
+    if let Some(w) = warning {
+        eprintln!("warning: {w} (read anyway: --allow-initial-contact)");
+    }
+    Ok(world)
+}
+
 /// Plans `problem` of `domain` in `scene` and reports; returns the exit code.
 /// `domain` and `problem` are read; `began` is when the command started reading.
 pub fn run_plan(
     domain: &Domain,
     problem: &Problem,
     began: std::time::Instant,
-    scene: &Path,
+    scene: SceneInput<'_>,
     planner: PlannerOptions,
     oracle: OracleConfig,
     out: &Outputs,
 ) -> anyhow::Result<u8> {
     // Reading a scene takes about 64 times its size in memory (TOML's tree): the memory limit
     // holds there too.
-    let len = std::fs::metadata(scene).map(|m| m.len()).unwrap_or(0);
+    let len = std::fs::metadata(scene.path).map(|m| m.len()).unwrap_or(0);
     if !htn::budget::fits(len.saturating_mul(geometry::scene::SCENE_MEMORY_PER_BYTE)) {
         anyhow::bail!(htn::budget::message(
             htn::planner::Limit::Memory,
-            &format!("reading the scene {} ({} KiB)", scene.display(), len >> 10)
+            &format!(
+                "reading the scene {} ({} KiB)",
+                scene.path.display(),
+                len >> 10
+            )
         ));
     }
-    let world = World::load(scene).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let world =
+        load_world(scene.path, scene.allow_initial_contact).map_err(|e| anyhow::anyhow!("{e}"))?;
     if let Some(limit) = htn::budget::check() {
         anyhow::bail!(htn::budget::message(limit, "reading the scene"));
     }

@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use geometry::render::{Camera, render};
-use geometry::world::World;
 use gtp::planner::{CallOptions, Planner};
 use gtp::solution::SolutionSummary;
 use gtp::verify::recheck_trajectories;
@@ -34,6 +33,10 @@ use crate::exit;
 pub struct Args {
     /// The scene file (TOML).
     pub scene: PathBuf,
+    /// Read the scene even when objects start inside one another (a warning then, not an
+    /// error); a robot inside furniture is still refused.
+    #[arg(long)]
+    pub allow_initial_contact: bool,
     /// The task's name.
     pub task: String,
     /// The task's arguments (object, support, human or target names).
@@ -73,7 +76,7 @@ struct Report<'a> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let world = match World::load(&args.scene) {
+    let world = match crate::cmd::geo::load_world(&args.scene, args.allow_initial_contact) {
         Ok(w) => w,
         Err(e) => {
             eprintln!("error: {e}");

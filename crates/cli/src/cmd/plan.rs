@@ -54,6 +54,10 @@ pub struct Args {
     /// shared predicates' initial facts are computed from it.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// With --scene: read the scene even when objects start inside one another (a warning
+    /// then, not an error); a robot inside furniture is still refused.
+    #[arg(long)]
+    pub allow_initial_contact: bool,
     /// With --scene: write pictures of the world after each GS action into this folder.
     #[arg(long, value_name = "DIR", requires = "scene")]
     pub png: Option<PathBuf>,
@@ -153,6 +157,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json: args.json,
             json_file: args.json_out.clone(),
             png_dir: args.png.clone(),
+        };
+        let scene = crate::cmd::geo::SceneInput {
+            path: scene,
+            allow_initial_contact: args.allow_initial_contact,
         };
         return crate::cmd::geo::run_plan(&domain, &problem, began, scene, options, oracle, &out);
     }

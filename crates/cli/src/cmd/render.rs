@@ -6,7 +6,6 @@ use anyhow::Context;
 use geometry::effort::aim_head;
 use geometry::render::{Camera, agent_camera, render};
 use geometry::scene::AgentKind;
-use geometry::world::World;
 
 /// Arguments of `htngtp render`.
 #[derive(clap::Args)]
@@ -23,6 +22,10 @@ use geometry::world::World;
 pub struct Args {
     /// The scene file (TOML).
     pub scene: PathBuf,
+    /// Read the scene even when objects start inside one another (a warning then, not an
+    /// error); a robot inside furniture is still refused.
+    #[arg(long)]
+    pub allow_initial_contact: bool,
     /// human | robot | top | AGENT-NAME
     #[arg(long, default_value = "top")]
     pub view: String,
@@ -42,7 +45,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let world = match World::load(&args.scene) {
+    let world = match crate::cmd::geo::load_world(&args.scene, args.allow_initial_contact) {
         Ok(w) => w,
         Err(e) => {
             eprintln!("error: {e}");
