@@ -486,6 +486,9 @@ pub struct AgentModel {
     dofs: Arc<DofTable>,
     /// For each configuration index, the joint index.
     dof_joints: Vec<usize>,
+    /// For each configuration index, the URDF's `<limit velocity="..">` (rad/s or m/s), `None`
+    /// when the URDF gives none (absent, zero, negative or not finite).
+    dof_velocity_limits: Vec<Option<f32>>,
 }
 
 impl AgentModel {
@@ -1234,8 +1237,13 @@ mod loader {
         let mut limits = Vec::new();
         let mut index = HashMap::new();
         let mut dof_joints = Vec::new();
+        let mut dof_velocity_limits = Vec::new();
         for (n, joint) in joints.iter_mut().enumerate() {
             if joint.kind != JointKind::Fixed && joint.mimic.is_none() {
+                let v = urdf_joint
+                    .get(joint.name.as_str())
+                    .map_or(0.0, |&i| robot.joints[i].limit.velocity);
+                dof_velocity_limits.push((v.is_finite() && v > 0.0).then_some(v as f32));
                 joint.dof = Some(names.len());
                 index.insert(joint.name.clone(), names.len());
                 names.push(joint.name.clone());
@@ -1262,6 +1270,7 @@ mod loader {
                 index,
             }),
             dof_joints,
+            dof_velocity_limits,
         })
     }
 }
