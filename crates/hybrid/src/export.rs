@@ -238,8 +238,8 @@ fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>)
 
 /// The velocity and acceleration limits of the joint `name` of `model`: the planar base's
 /// defaults for `base_x`, `base_y` and `base_yaw`, else the URDF's velocity limit (or
-/// [`timing::DEFAULT_JOINT_VELOCITY`] where it declares none) and
-/// [`timing::DEFAULT_JOINT_ACCELERATION`].
+/// [`timing::DEFAULT_JOINT_VELOCITY`] where it declares none) and its URDF 1.2 acceleration
+/// limit (or [`timing::DEFAULT_JOINT_ACCELERATION`], as for the shipped models).
 fn joint_limits(model: &geometry::agent::AgentModel, name: &str) -> (f64, f64) {
     match name {
         "base_x" | "base_y" => (
@@ -250,14 +250,15 @@ fn joint_limits(model: &geometry::agent::AgentModel, name: &str) -> (f64, f64) {
             timing::BASE_ANGULAR_VELOCITY,
             timing::BASE_ANGULAR_ACCELERATION,
         ),
-        _ => (
-            model
-                .dof_index(name)
-                .ok()
-                .and_then(|d| model.dof_velocity_limit(d))
-                .map_or(timing::DEFAULT_JOINT_VELOCITY, f64::from),
-            timing::DEFAULT_JOINT_ACCELERATION,
-        ),
+        _ => {
+            let dof = model.dof_index(name).ok();
+            (
+                dof.and_then(|d| model.dof_velocity_limit(d))
+                    .map_or(timing::DEFAULT_JOINT_VELOCITY, f64::from),
+                dof.and_then(|d| model.dof_acceleration_limit(d))
+                    .map_or(timing::DEFAULT_JOINT_ACCELERATION, f64::from),
+            )
+        }
     }
 }
 

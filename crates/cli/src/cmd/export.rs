@@ -3,7 +3,7 @@
 //! `trajectory_msgs/JointTrajectory` message.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
 use serde_json::Value;
