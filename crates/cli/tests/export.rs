@@ -3,7 +3,7 @@
 //! reader below, which knows the block layout of ROS's JointTrajectory and flow sequences of
 //! numbers) into exactly the joint names, positions, velocities and times of the JSON's points.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 use serde_json::Value;
