@@ -25,13 +25,15 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// One point as read back: (positions, velocities, accelerations, sec, nanosec).
+type Point = (Vec<f64>, Vec<f64>, Vec<f64>, i64, u32);
+
 /// One JointTrajectory as read back from YAML.
 #[derive(Debug, Default)]
 struct Read {
     frame_id: String,
     joint_names: Vec<String>,
-    /// (positions, velocities, accelerations, sec, nanosec)
-    points: Vec<(Vec<f64>, Vec<f64>, Vec<f64>, i64, u32)>,
+    points: Vec<Point>,
 }
 
 fn flow(s: &str) -> Vec<f64> {
