@@ -234,7 +234,9 @@ fn velocity_limits_are_read_from_the_urdf() {
         let m = AgentModel::from_urdf_str(&urdf(bad), "r.urdf").unwrap();
         assert_eq!(m.dof_velocity_limit(0), None, "{bad}");
     }
-    // URDF 1.2's acceleration attribute.
-    let m = AgentModel::from_urdf_str(&urdf(r#"velocity="2" acceleration="3""#), "r.urdf").unwrap();
+    // URDF 1.2's acceleration attribute (read in a file that says it is URDF 1.2).
+    let text = urdf(r#"velocity="2" acceleration="3""#)
+        .replace(r#"<robot name="r">"#, r#"<robot name="r" version="1.2">"#);
+    let m = AgentModel::from_urdf_str(&text, "r.urdf").unwrap();
     assert_eq!(m.dof_acceleration_limit(0), Some(3.0));
 }
