@@ -1,9 +1,10 @@
 //! `check`: an independent geometric re-check of an htngtp plan JSON.
 //!
 //! It uses only what the file declares (scene objects' shapes and poses, each agent link's shapes,
-//! link poses per frame, `holding` / `held_pose`, `object_poses` after each step, the literals a
-//! step adds and deletes) and parry3d's queries; never the planner's state or its collision code,
-//! so that a plan it passes is collision-free by a second opinion. The rules are in
+//! link poses per frame, `holding` / `held_pose`, the timed `joint_trajectory` with its declared
+//! limits, `object_poses` after each step, the literals a step adds and deletes) and parry3d's
+//! queries; never the planner's state or its collision code, so that a plan it passes is
+//! collision-free by a second opinion. The rules are in
 //! `docs/check.md`.
 
 mod bodies;
@@ -14,6 +15,7 @@ mod parse;
 pub mod report;
 mod rest;
 mod sweep;
+mod timing;
 mod walk;
 mod world;
 

@@ -61,6 +61,31 @@ pub struct Trajectory {
     /// Object index declared in `holding`.
     pub holding: Option<usize>,
     pub frames: Vec<Frame>,
+    /// The timed joint trajectory (`joint_trajectory`; absent in older plan JSONs).
+    pub joint_trajectory: Option<JointTrajectory>,
+}
+
+/// A trajectory's joints over time, with the limits it declares (lengths checked when parsed:
+/// every per-joint list has one value per joint name).
+#[derive(Clone)]
+pub struct JointTrajectory {
+    pub joint_names: Vec<String>,
+    /// Per joint, the velocity limit (rad/s or m/s, positive).
+    pub velocity_limits: Vec<f64>,
+    /// Per joint, the acceleration limit (rad/s^2 or m/s^2, positive).
+    pub acceleration_limits: Vec<f64>,
+    /// The planner's waypoints the points pass through, when declared.
+    pub waypoints: Option<Vec<Vec<f64>>>,
+    pub points: Vec<JointPoint>,
+}
+
+/// One timed point of a [`JointTrajectory`].
+#[derive(Clone)]
+pub struct JointPoint {
+    pub positions: Vec<f64>,
+    pub velocities: Vec<f64>,
+    /// Seconds from the trajectory's start.
+    pub time: f64,
 }
 
 /// A literal as the JSON writes it: predicate then arguments.

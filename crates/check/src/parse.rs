@@ -6,7 +6,10 @@ use parry3d::shape::SharedShape;
 use serde_json::Value;
 
 use crate::error::InputError;
-use crate::model::{Agent, AgentKind, Frame, Link, Object, Part, Plan, Step, Trajectory};
+use crate::model::{
+    Agent, AgentKind, Frame, JointPoint, JointTrajectory, Link, Object, Part, Plan, Step,
+    Trajectory,
+};
 
 type Res<T> = Result<T, InputError>;
 
@@ -364,5 +367,60 @@ fn trajectory(n: Node, p: &Plan) -> Res<Trajectory> {
         label: n.opt("label", |n| n.str())?.unwrap_or_default(),
         holding,
         frames,
+        joint_trajectory: n.opt("joint_trajectory", joint_trajectory)?,
+    })
+}
+
+/// A finite number (a joint value, velocity, limit or time).
+fn number(n: Node) -> Res<f64> {
+    match n.v.as_f64() {
+        Some(x) if x.is_finite() => Ok(x),
+        _ => Err(InputError::bad(n.path, "expected a finite number")),
+    }
+}
+
+/// A list of `len` finite numbers.
+fn numbers(n: Node, len: usize) -> Res<Vec<f64>> {
+    let v = n.array(number)?;
+    if v.len() != len {
+        return Err(InputError::bad(
+            n.path,
+            format!(
+                "expected {len} numbers (one per joint name), found {}",
+                v.len()
+            ),
+        ));
+    }
+    Ok(v)
+}
+
+fn joint_trajectory(n: Node) -> Res<JointTrajectory> {
+    let joint_names = n.get("joint_names", |n| n.array(|s| s.str()))?;
+    let len = joint_names.len();
+    let limits = |n: Node| {
+        let v = numbers(n, len)?;
+        if v.iter().any(|x| *x <= 0.0) {
+            return Err(InputError::bad(n.path, "expected positive limits"));
+        }
+        Ok(v)
+    };
+    let velocity_limits = n.get("velocity_limits", limits)?;
+    let acceleration_limits = n.get("acceleration_limits", limits)?;
+    let waypoints = n.opt("waypoints", |n| n.array(|w| numbers(w, len)))?;
+    let points = n.get("points", |n| {
+        n.array(|p| {
+            Ok(JointPoint {
+                positions: p.get("positions", |n| numbers(n, len))?,
+                velocities: p.get("velocities", |n| numbers(n, len))?,
+                time: p.get("time_from_start", number)?,
+            })
+        })
+    })?;
+    Ok(JointTrajectory {
+        joint_names,
+        velocity_limits,
+        acceleration_limits,
+        waypoints,
+        points,
     })
 }

@@ -22,6 +22,10 @@ pub enum FaultKind {
     StaleLiteral,
     /// A trajectory moves the gripper that holds an object but declares `holding: null`.
     UndeclaredCarry,
+    /// A timed joint trajectory breaks a rule of its timing: times not strictly increasing from
+    /// 0, not at rest at its ends, a velocity or acceleration over its declared limit, or ends
+    /// that are not its first and last waypoints.
+    Timing,
 }
 
 impl FaultKind {
@@ -34,6 +38,7 @@ impl FaultKind {
             FaultKind::Penetration => "penetration",
             FaultKind::StaleLiteral => "stale-literal",
             FaultKind::UndeclaredCarry => "undeclared-carry",
+            FaultKind::Timing => "timing",
         }
     }
 }
@@ -147,6 +152,7 @@ fn plural(k: FaultKind, n: usize) -> String {
     let s = if n == 1 { "" } else { "s" };
     match k {
         FaultKind::Unsupported => "unsupported".to_string(),
+        FaultKind::Timing => format!("timing fault{s}"),
         other => format!("{}{s}", other.name()),
     }
 }

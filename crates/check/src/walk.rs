@@ -9,6 +9,7 @@ use crate::model::{Literal, Plan, Step, Trajectory};
 use crate::report::{Fault, FaultKind, Report};
 use crate::rest::check_rest;
 use crate::sweep::{Carry, Sweep};
+use crate::timing::check_timing;
 use crate::world::World;
 
 /// Check a whole plan.
@@ -33,6 +34,8 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
         release_handed_over(plan, step, &mut world);
         let mut declared = BTreeSet::new();
         for (k, traj) in step.trajectories.iter().enumerate() {
+            let agent = &plan.agents[traj.agent].name;
+            report.faults.extend(check_timing(step, k, traj, agent));
             let ctx = (step, k, &adjacency[traj.agent]);
             run_trajectory(
                 plan,

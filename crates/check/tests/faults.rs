@@ -646,3 +646,163 @@ fn unknown_names_and_bad_values_are_bad_input() {
         .expect("an error");
     assert!(matches!(err, InputError::Bad { .. }), "{err}");
 }
+
+/// One joint from 0 to 1 in 2 s: a triangular profile at 1 rad/s^2 peaking at 1 rad/s.
+fn joint_trajectory() -> serde_json::Value {
+    json!({
+        "agent": "bot",
+        "group": "right_arm",
+        "joint_names": ["r_shoulder_pan_joint"],
+        "velocity_limits": [1.0],
+        "acceleration_limits": [1.0],
+        "waypoints": [[0.0], [1.0]],
+        "points": [
+            { "positions": [0.0], "velocities": [0.0], "time_from_start": 0.0 },
+            { "positions": [0.5], "velocities": [1.0], "time_from_start": 1.0 },
+            { "positions": [1.0], "velocities": [0.0], "time_from_start": 2.0 },
+        ],
+    })
+}
+
+/// The clean plan with `jt` as its trajectory's `joint_trajectory`.
+fn timed(jt: serde_json::Value) -> serde_json::Value {
+    let mut plan = clean_plan();
+    plan["steps"][0]["gtp"]["trajectories"][0]["joint_trajectory"] = jt;
+    plan
+}
+
+/// The timing faults of a plan as (joint, rule, point, configs).
+fn timing_faults(plan: &serde_json::Value) -> Vec<(String, String, String, usize)> {
+    let r = check(plan);
+    assert!(r.faults.iter().all(|f| f.kind == FaultKind::Timing));
+    r.faults
+        .iter()
+        .map(|f| {
+            (
+                f.a.clone(),
+                f.b.clone(),
+                f.frame.clone().unwrap_or_default(),
+                f.configs,
+            )
+        })
+        .collect()
+}
+
+fn fault(joint: &str, rule: &str, point: usize, configs: usize) -> (String, String, String, usize) {
+    (
+        joint.to_string(),
+        rule.to_string(),
+        format!("point {point}"),
+        configs,
+    )
+}
+
+#[test]
+fn timed_trajectory_within_its_limits_is_clean() {
+    let r = check(&timed(joint_trajectory()));
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+}
+
+#[test]
+fn velocity_over_its_limit() {
+    let mut jt = joint_trajectory();
+    jt["velocity_limits"] = json!([0.8]);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault("bot/r_shoulder_pan_joint", "velocity limit", 1, 1)]
+    );
+    // Positions that move faster than the declared velocities say.
+    let mut jt = joint_trajectory();
+    jt["points"][1]["time_from_start"] = json!(0.2);
+    jt["points"][1]["velocities"] = json!([0.1]);
+    jt["points"][1]["positions"] = json!([0.9]);
+    let got = timing_faults(&timed(jt));
+    assert!(
+        got.contains(&fault("bot/r_shoulder_pan_joint", "velocity limit", 1, 1)),
+        "{got:?}"
+    );
+}
+
+#[test]
+fn acceleration_over_its_limit() {
+    let mut jt = joint_trajectory();
+    jt["acceleration_limits"] = json!([0.5]);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault(
+            "bot/r_shoulder_pan_joint",
+            "acceleration limit",
+            1,
+            2
+        )]
+    );
+}
+
+#[test]
+fn times_must_start_at_zero_and_increase() {
+    let mut jt = joint_trajectory();
+    jt["points"][2]["time_from_start"] = json!(1.0);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault("bot", "time order", 2, 1)]
+    );
+    let mut jt = joint_trajectory();
+    jt["points"][0]["time_from_start"] = json!(0.5);
+    let got = timing_faults(&timed(jt));
+    assert!(got.contains(&fault("bot", "start time", 0, 1)), "{got:?}");
+}
+
+#[test]
+fn trajectory_must_start_and_end_at_rest() {
+    let mut jt = joint_trajectory();
+    jt["points"][2]["velocities"] = json!([0.3]);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault("bot/r_shoulder_pan_joint", "end at rest", 2, 1)]
+    );
+    let mut jt = joint_trajectory();
+    jt["points"][0]["velocities"] = json!([0.3]);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault("bot/r_shoulder_pan_joint", "start at rest", 0, 1)]
+    );
+}
+
+#[test]
+fn ends_must_be_the_waypoints() {
+    let mut jt = joint_trajectory();
+    jt["waypoints"] = json!([[0.0], [0.4], [1.2]]);
+    assert_eq!(
+        timing_faults(&timed(jt)),
+        vec![fault("bot/r_shoulder_pan_joint", "end waypoint", 2, 1)]
+    );
+    // Without waypoints there is nothing to compare.
+    let mut jt = joint_trajectory();
+    jt.as_object_mut().unwrap().remove("waypoints");
+    assert!(timing_faults(&timed(jt)).is_empty());
+}
+
+#[test]
+fn malformed_joint_trajectory_is_bad_input() {
+    let bad = |jt: serde_json::Value| {
+        check::parse_plan(&timed(jt).to_string(), "p.json")
+            .err()
+            .expect("an error")
+            .to_string()
+    };
+    let mut jt = joint_trajectory();
+    jt["points"][1]["velocities"] = json!([1.0, 2.0]);
+    assert!(
+        bad(jt).contains("joint_trajectory.points[1].velocities"),
+        "names the path"
+    );
+    let mut jt = joint_trajectory();
+    jt["acceleration_limits"] = json!([-1.0]);
+    assert!(bad(jt).contains("positive"));
+    let mut jt = joint_trajectory();
+    jt["points"][0]["time_from_start"] = json!("soon");
+    assert!(bad(jt).contains("finite number"));
+    let mut jt = joint_trajectory();
+    jt.as_object_mut().unwrap().remove("velocity_limits");
+    assert!(bad(jt).contains("missing key"));
+}

@@ -61,6 +61,8 @@ enum Command {
     Gtp(cmd::gtp::Args),
     /// Re-check a plan JSON's geometry independently: collisions, support, literals.
     Check(cmd::check::Args),
+    /// Write a plan JSON's timed joint trajectories as ROS JointTrajectory YAML files.
+    Export(cmd::export::Args),
     /// Serve the 3D web viewer and a plan JSON on 127.0.0.1, and print the URL to open.
     View(cmd::view::Args),
 }
@@ -89,6 +91,7 @@ fn main() -> ExitCode {
         Command::Gtp(args) => cmd::gtp::run(args),
         Command::View(args) => cmd::view::run(args),
         Command::Check(args) => cmd::check::run(args),
+        Command::Export(args) => cmd::export::run(args),
     };
     out::flush();
     match result {

@@ -70,6 +70,24 @@ fn faults(json: &Path) -> Option<String> {
     (check.status.code() != Some(0)).then(|| String::from_utf8_lossy(&check.stdout).into_owned())
 }
 
+/// The trajectories of a plan JSON without a timed `joint_trajectory` (issue 16: every GS
+/// trajectory has one, with at least one point), as `step S trajectory K`.
+fn untimed(json: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(json).expect("plan JSON");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let mut out = Vec::new();
+    for (i, step) in v["steps"].as_array().into_iter().flatten().enumerate() {
+        let trajs = step["gtp"]["trajectories"].as_array();
+        for (k, t) in trajs.into_iter().flatten().enumerate() {
+            let points = t["joint_trajectory"]["points"].as_array();
+            if points.is_none_or(|p| p.is_empty()) {
+                out.push(format!("step {i} trajectory {k} has no timed joint points"));
+            }
+        }
+    }
+    out
+}
+
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("htngtp-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -88,6 +106,9 @@ fn every_shipped_plan_passes_the_independent_check() {
                     continue;
                 };
                 checked += 1;
+                untimed(&json)
+                    .into_iter()
+                    .for_each(|t| faulty.push(format!("{domain} {} {strategy}: {t}", problem.0)));
                 if let Some(report) = faults(&json) {
                     faulty.push(format!("{domain} {} {strategy}:\n{report}", problem.0));
                 }

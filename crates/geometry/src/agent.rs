@@ -486,6 +486,12 @@ pub struct AgentModel {
     dofs: Arc<DofTable>,
     /// For each configuration index, the joint index.
     dof_joints: Vec<usize>,
+    /// For each configuration index, the URDF's `<limit velocity="..">` (rad/s or m/s), `None`
+    /// when the URDF gives none (absent, zero, negative or not finite).
+    dof_velocity_limits: Vec<Option<f32>>,
+    /// For each configuration index, URDF 1.2's `<limit acceleration="..">` (rad/s^2 or
+    /// m/s^2), `None` when absent, not positive or not finite.
+    dof_acceleration_limits: Vec<Option<f32>>,
 }
 
 impl AgentModel {
@@ -568,6 +574,20 @@ impl AgentModel {
                 model: self.name.clone(),
                 name: name.to_string(),
             })
+    }
+
+    /// The URDF velocity limit of configuration index `dof` (rad/s or m/s): `None` when the
+    /// URDF declares none (a zero, negative or non-finite `velocity`; a continuous joint without
+    /// `<limit>`) or `dof` is out of range.
+    pub fn dof_velocity_limit(&self, dof: usize) -> Option<f32> {
+        self.dof_velocity_limits.get(dof).copied().flatten()
+    }
+
+    /// The URDF acceleration limit of configuration index `dof` (URDF 1.2's `acceleration`
+    /// attribute, rad/s^2 or m/s^2): `None` when absent, not positive, not finite, or `dof` is
+    /// out of range.
+    pub fn dof_acceleration_limit(&self, dof: usize) -> Option<f32> {
+        self.dof_acceleration_limits.get(dof).copied().flatten()
     }
 
     /// The joint index of configuration entry `dof`.
@@ -1234,8 +1254,16 @@ mod loader {
         let mut limits = Vec::new();
         let mut index = HashMap::new();
         let mut dof_joints = Vec::new();
+        let mut dof_velocity_limits = Vec::new();
+        let mut dof_acceleration_limits = Vec::new();
+        let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v as f32);
         for (n, joint) in joints.iter_mut().enumerate() {
             if joint.kind != JointKind::Fixed && joint.mimic.is_none() {
+                let limit = urdf_joint
+                    .get(joint.name.as_str())
+                    .map(|&i| &robot.joints[i].limit);
+                dof_velocity_limits.push(limit.and_then(|l| positive(l.velocity)));
+                dof_acceleration_limits.push(limit.and_then(|l| positive(l.acceleration)));
                 joint.dof = Some(names.len());
                 index.insert(joint.name.clone(), names.len());
                 names.push(joint.name.clone());
@@ -1262,6 +1290,8 @@ mod loader {
                 index,
             }),
             dof_joints,
+            dof_velocity_limits,
+            dof_acceleration_limits,
         })
     }
 }

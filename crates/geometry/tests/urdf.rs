@@ -206,3 +206,37 @@ fn corrupted_models_never_panic() {
         }
     }
 }
+
+#[test]
+fn velocity_limits_are_read_from_the_urdf() {
+    let pr2 = AgentModel::from_urdf_file(model_path("pr2.urdf")).unwrap();
+    let i = pr2.dof_index("r_shoulder_pan_joint").unwrap();
+    assert_eq!(pr2.dof_velocity_limit(i), Some(1.0));
+    // A continuous joint without a <limit> declares none.
+    let i = pr2.dof_index("r_wrist_roll_joint").unwrap();
+    assert_eq!(pr2.dof_velocity_limit(i), None);
+    assert_eq!(pr2.dof_velocity_limit(pr2.dof()), None, "out of range");
+    let urdf = |velocity: &str| {
+        format!(
+            r#"<robot name="r"><link name="a"/><link name="b"/>
+            <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
+            <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" {velocity}/></joint></robot>"#
+        )
+    };
+    let m = AgentModel::from_urdf_str(&urdf(r#"velocity="2.5""#), "r.urdf").unwrap();
+    assert_eq!(m.dof_velocity_limit(0), Some(2.5));
+    assert_eq!(
+        m.dof_acceleration_limit(0),
+        None,
+        "URDF 1.0 has no acceleration"
+    );
+    for bad in [r#"velocity="0""#, r#"velocity="-1""#] {
+        let m = AgentModel::from_urdf_str(&urdf(bad), "r.urdf").unwrap();
+        assert_eq!(m.dof_velocity_limit(0), None, "{bad}");
+    }
+    // URDF 1.2's acceleration attribute (read in a file that says it is URDF 1.2).
+    let text = urdf(r#"velocity="2" acceleration="3""#)
+        .replace(r#"<robot name="r">"#, r#"<robot name="r" version="1.2">"#);
+    let m = AgentModel::from_urdf_str(&text, "r.urdf").unwrap();
+    assert_eq!(m.dof_acceleration_limit(0), Some(3.0));
+}

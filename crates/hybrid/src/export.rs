@@ -12,6 +12,7 @@ use parry3d::shape::{ConvexPolyhedron, Cylinder, SharedShape};
 use serde_json::{Value, json};
 
 use crate::run::Run;
+use crate::timing;
 
 /// Largest joint change between two frames of an exported trajectory (radians or metres).
 const FRAME_STEP: f32 = 0.04;
@@ -230,8 +231,70 @@ fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>)
         "label": t.phase,
         "holding": t.held.as_ref().map(|h| h.object.clone()),
         "frames": frames,
+        "joint_trajectory": joint_trajectory_json(&model, t),
     });
     (value, world)
+}
+
+/// The velocity and acceleration limits of the joint `name` of `model`: the planar base's
+/// defaults for `base_x`, `base_y` and `base_yaw`, else the URDF's velocity limit (or
+/// [`timing::DEFAULT_JOINT_VELOCITY`] where it declares none) and its URDF 1.2 acceleration
+/// limit (or [`timing::DEFAULT_JOINT_ACCELERATION`], as for the shipped models).
+fn joint_limits(model: &geometry::agent::AgentModel, name: &str) -> (f64, f64) {
+    match name {
+        "base_x" | "base_y" => (
+            timing::BASE_LINEAR_VELOCITY,
+            timing::BASE_LINEAR_ACCELERATION,
+        ),
+        "base_yaw" => (
+            timing::BASE_ANGULAR_VELOCITY,
+            timing::BASE_ANGULAR_ACCELERATION,
+        ),
+        _ => {
+            let dof = model.dof_index(name).ok();
+            (
+                dof.and_then(|d| model.dof_velocity_limit(d))
+                    .map_or(timing::DEFAULT_JOINT_VELOCITY, f64::from),
+                dof.and_then(|d| model.dof_acceleration_limit(d))
+                    .map_or(timing::DEFAULT_JOINT_ACCELERATION, f64::from),
+            )
+        }
+    }
+}
+
+/// The timed joint trajectory of `t` (see `docs/plan-json.md`): its waypoints joined by
+/// rest-to-rest trapezoidal profiles within each joint's limits. `null` when the waypoints
+/// cannot be timed (mismatched lengths or non-finite values, which the planner never writes).
+fn joint_trajectory_json(model: &geometry::agent::AgentModel, t: &Trajectory) -> Value {
+    let (velocity, acceleration): (Vec<f64>, Vec<f64>) =
+        t.joints.iter().map(|j| joint_limits(model, j)).unzip();
+    let waypoints: Vec<Vec<f64>> = t
+        .waypoints
+        .iter()
+        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
+        .collect();
+    let Ok(points) = timing::time_path(&waypoints, &velocity, &acceleration) else {
+        return Value::Null;
+    };
+    let points: Vec<Value> = points
+        .into_iter()
+        .map(|p| {
+            json!({
+                "positions": p.positions,
+                "velocities": p.velocities,
+                "time_from_start": p.time,
+            })
+        })
+        .collect();
+    json!({
+        "agent": t.agent,
+        "group": t.arm,
+        "joint_names": t.joints,
+        "velocity_limits": velocity,
+        "acceleration_limits": acceleration,
+        "waypoints": waypoints,
+        "points": points,
+    })
 }
 
 /// The link of `agent` that the object `t` carries is attached to in `world` (a drive carries

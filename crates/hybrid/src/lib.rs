@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod export;
 pub mod oracle;
 pub mod run;
+pub mod timing;
 
 pub use oracle::{GtpOracle, OracleConfig};
 pub use run::{HybridError, Run, RunOptions, plan, plan_files};

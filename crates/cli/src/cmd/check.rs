@@ -15,7 +15,10 @@ use crate::exit;
     target; adjacent links of one agent may touch, see docs/check.md); that every object at rest after a step lies within \
     2 mm of a surface under it and penetrates nothing; and re-measures each added or deleted \
     `visible` / `reachable` literal (visible: half of the pixels; reach 0.95 m robot, 0.70 m \
-    person), reporting only clear disagreements.\n\nExit codes: 0 clean, 1 faults found, \
+    person), reporting only clear disagreements; and, where a trajectory has a \
+    `joint_trajectory`, its timing: times strictly increasing from 0, at rest at both ends, \
+    velocities and accelerations within the limits it declares, its ends at its first and \
+    last waypoints (`timing` faults).\n\nExit codes: 0 clean, 1 faults found, \
     3 bad input (unreadable file, bad JSON with line and column, missing key with its path)."
 )]
 pub struct Args {

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod bench_hddl;
 pub mod check;
 pub mod demo;
+pub mod export;
 pub mod facts;
 pub mod geo;
 pub mod gtp;
