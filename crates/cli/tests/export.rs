@@ -3,13 +3,24 @@
 //! reader below, which knows the block layout of ROS's JointTrajectory and flow sequences of
 //! numbers) into exactly the joint names, positions, velocities and times of the JSON's points.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
 
 fn htngtp() -> Command {
     Command::new(env!("CARGO_BIN_EXE_htngtp"))
+}
+
+/// `htngtp export PLAN --format joint-trajectory-yaml DIR`.
+fn export(plan: &Path, dir: impl AsRef<Path>) -> std::process::Output {
+    htngtp()
+        .arg("export")
+        .arg(plan)
+        .args(["--format", "joint-trajectory-yaml"])
+        .arg(dir.as_ref())
+        .output()
+        .expect("runs")
 }
 
 fn library(name: &str) -> PathBuf {
@@ -140,18 +151,12 @@ fn exported_yaml_reads_back_into_the_plan_json_points() {
     );
 
     let out_dir = dir.join("yaml");
-    let export = htngtp()
-        .arg("export")
-        .arg(&json)
-        .args(["--format", "joint-trajectory-yaml"])
-        .arg(&out_dir)
-        .output()
-        .expect("runs");
+    let exported = export(&json, &out_dir);
     assert_eq!(
-        export.status.code(),
+        exported.status.code(),
         Some(0),
         "{}",
-        String::from_utf8_lossy(&export.stderr)
+        String::from_utf8_lossy(&exported.stderr)
     );
 
     let v: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -210,25 +215,13 @@ fn export_refuses_a_plan_without_joint_trajectories_and_bad_json() {
     let dir = scratch("bad");
     let plain = dir.join("plain.json");
     std::fs::write(&plain, r#"{"steps": [{"action": "a", "gtp": null}]}"#).unwrap();
-    let out = htngtp()
-        .arg("export")
-        .arg(&plain)
-        .args(["--format", "joint-trajectory-yaml"])
-        .arg(dir.join("out"))
-        .output()
-        .expect("runs");
+    let out = export(&plain, dir.join("out"));
     assert_eq!(out.status.code(), Some(3));
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("no trajectory has a `joint_trajectory`")
     );
     std::fs::write(&plain, "{ not json").unwrap();
-    let out = htngtp()
-        .arg("export")
-        .arg(&plain)
-        .args(["--format", "joint-trajectory-yaml"])
-        .arg(dir.join("out"))
-        .output()
-        .expect("runs");
+    let out = export(&plain, dir.join("out"));
     assert_eq!(out.status.code(), Some(3));
     let bad = dir.join("bad.json");
     let jt = r#"{"agent": "a", "group": "g", "joint_names": ["j"], "points": [{"positions": [1, 2], "velocities": [0], "time_from_start": 0}]}"#;
@@ -237,13 +230,7 @@ fn export_refuses_a_plan_without_joint_trajectories_and_bad_json() {
         format!(r#"{{"steps": [{{"gtp": {{"trajectories": [{{"joint_trajectory": {jt}}}]}}}}]}}"#),
     )
     .unwrap();
-    let out = htngtp()
-        .arg("export")
-        .arg(&bad)
-        .args(["--format", "joint-trajectory-yaml"])
-        .arg(dir.join("out"))
-        .output()
-        .expect("runs");
+    let out = export(&bad, dir.join("out"));
     assert_eq!(out.status.code(), Some(3));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
