@@ -36,4 +36,38 @@ impl Stats {
     pub fn add_time(&mut self, d: Duration) {
         self.time_s += d.as_secs_f64();
     }
+
+    /// What one request of a stream did: these cumulative counters minus those taken before
+    /// it (`before`). Success, effort level and solutions are this request's.
+    pub fn since(&self, before: &Stats) -> Stats {
+        Stats {
+            time_s: self.time_s - before.time_s,
+            points: self.points.saturating_sub(before.points),
+            grasps: self.grasps.saturating_sub(before.grasps),
+            orientations: self.orientations.saturating_sub(before.orientations),
+            planner_calls: self.planner_calls.saturating_sub(before.planner_calls),
+            ik_calls: self.ik_calls.saturating_sub(before.ik_calls),
+            visibility_checks: self
+                .visibility_checks
+                .saturating_sub(before.visibility_checks),
+            solutions: self.solutions.saturating_sub(before.solutions),
+            ..*self
+        }
+    }
+
+    /// Sums another request's statistics into these (a task's totals over a run or an
+    /// experiment): counters and time add up, the effort level is the highest reached, and
+    /// `success` is whether any request succeeded.
+    pub fn accumulate(&mut self, other: &Stats) {
+        self.time_s += other.time_s;
+        self.success |= other.success;
+        self.points += other.points;
+        self.grasps += other.grasps;
+        self.orientations += other.orientations;
+        self.planner_calls += other.planner_calls;
+        self.ik_calls += other.ik_calls;
+        self.visibility_checks += other.visibility_checks;
+        self.effort_level = self.effort_level.max(other.effort_level);
+        self.solutions += other.solutions;
+    }
 }

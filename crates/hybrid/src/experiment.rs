@@ -115,7 +115,7 @@ pub struct Experiment {
     pub wall_time_s: f64,
 }
 
-/// One row of Table II.
+/// One row of Table II: a task's [`TaskStats`] as means per request (the paper's columns).
 #[derive(Clone, Debug, Serialize)]
 pub struct TableRow {
     pub task: String,
@@ -130,36 +130,35 @@ pub struct TableRow {
     pub attempts: u64,
 }
 
+impl TableRow {
+    /// The row of `task` from its totals.
+    fn of(task: String, s: &TaskStats) -> TableRow {
+        let n = s.attempts.max(1) as f64;
+        let mean = |v: usize| v as f64 / n;
+        TableRow {
+            task,
+            mean_time_s: s.total_time_s() / n,
+            success_pct: 100.0 * s.successes as f64 / n,
+            points: mean(s.search.points),
+            grasps: mean(s.search.grasps),
+            orientations: mean(s.search.orientations),
+            planner_calls: mean(s.search.planner_calls),
+            attempts: s.attempts,
+        }
+    }
+}
+
 impl Experiment {
     /// Table II: per GTP task, over every solution request of every run.
     pub fn table(&self) -> Vec<TableRow> {
         let mut sum: BTreeMap<String, TaskStats> = BTreeMap::new();
         for r in &self.runs {
             for (k, s) in &r.tasks {
-                let e = sum.entry(k.clone()).or_default();
-                e.attempts += s.attempts;
-                e.successes += s.successes;
-                e.time_s += s.time_s + s.facts_time_s;
-                e.points += s.points;
-                e.grasps += s.grasps;
-                e.orientations += s.orientations;
-                e.planner_calls += s.planner_calls;
+                sum.entry(k.clone()).or_default().add(s);
             }
         }
         sum.into_iter()
-            .map(|(task, s)| {
-                let n = s.attempts.max(1) as f64;
-                TableRow {
-                    task,
-                    mean_time_s: s.time_s / n,
-                    success_pct: 100.0 * s.successes as f64 / n,
-                    points: s.points as f64 / n,
-                    grasps: s.grasps as f64 / n,
-                    orientations: s.orientations as f64 / n,
-                    planner_calls: s.planner_calls as f64 / n,
-                    attempts: s.attempts,
-                }
-            })
+            .map(|(task, s)| TableRow::of(task, &s))
             .collect()
     }
 

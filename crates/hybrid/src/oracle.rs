@@ -50,23 +50,47 @@ impl Default for OracleConfig {
     }
 }
 
-/// Table II figures of one geometric task, summed over a run.
+/// Table II figures of one geometric task, summed over a run (or over an experiment's runs).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct TaskStats {
     /// Solution requests (a first solution, or another one when backtracking).
     pub attempts: u64,
     /// Requests that produced a solution.
     pub successes: u64,
-    /// Search time, seconds.
-    pub time_s: f64,
-    pub points: u64,
-    pub grasps: u64,
-    pub orientations: u64,
-    pub planner_calls: u64,
+    /// The GTP's statistics of these requests, summed ([`Stats::accumulate`]).
+    #[serde(flatten)]
+    pub search: Stats,
     /// Time spent computing shared literals of the resulting worlds, seconds.
     pub facts_time_s: f64,
     /// Why the last failed request failed (the constraint that stopped it).
     pub last_failure: Option<String>,
+}
+
+impl TaskStats {
+    /// Adds one request: its GTP statistics, whether it found a solution, and the time the
+    /// shared literals of that solution took.
+    pub fn record(&mut self, request: &Stats, solved: bool, facts_time_s: f64) {
+        self.attempts += 1;
+        self.successes += u64::from(solved);
+        self.search.accumulate(request);
+        self.facts_time_s += facts_time_s;
+    }
+
+    /// Adds another total of the same task (another run of an experiment).
+    pub fn add(&mut self, other: &TaskStats) {
+        self.attempts += other.attempts;
+        self.successes += other.successes;
+        self.search.accumulate(&other.search);
+        self.facts_time_s += other.facts_time_s;
+        if other.last_failure.is_some() {
+            self.last_failure.clone_from(&other.last_failure);
+        }
+    }
+
+    /// Time of GTP search and shared literals together, seconds.
+    pub fn total_time_s(&self) -> f64 {
+        self.search.time_s + self.facts_time_s
+    }
 }
 
 /// A world of the stack with its shared literals.
@@ -255,7 +279,7 @@ impl GtpOracle {
         let solution = stream.gtp.next();
         Ok(Pulled {
             solution,
-            delta: diff_stats(&stream.gtp.stats(), &before),
+            delta: stream.gtp.stats().since(&before),
             task: stream.task.clone(),
             args: stream.args.clone(),
             failure: stream.gtp.failure().map(|f| f.to_string()),
@@ -319,14 +343,7 @@ impl GeometricOracle for GtpOracle {
             }
         };
         let s = self.stats.entry(task.clone()).or_default();
-        s.attempts += 1;
-        s.successes += u64::from(result.is_some());
-        s.time_s += delta.time_s;
-        s.points += delta.points as u64;
-        s.grasps += delta.grasps as u64;
-        s.orientations += delta.orientations as u64;
-        s.planner_calls += delta.planner_calls as u64;
-        s.facts_time_s += t0.elapsed().as_secs_f64();
+        s.record(&delta, result.is_some(), t0.elapsed().as_secs_f64());
         if self.config.trace {
             let lists = result
                 .as_ref()
@@ -382,16 +399,5 @@ impl GeometricOracle for GtpOracle {
 
     fn world_fingerprint(&self) -> u64 {
         self.stack[self.stack.len() - 1].fingerprint
-    }
-}
-
-fn diff_stats(after: &Stats, before: &Stats) -> Stats {
-    Stats {
-        time_s: after.time_s - before.time_s,
-        points: after.points.saturating_sub(before.points),
-        grasps: after.grasps.saturating_sub(before.grasps),
-        orientations: after.orientations.saturating_sub(before.orientations),
-        planner_calls: after.planner_calls.saturating_sub(before.planner_calls),
-        ..Stats::default()
     }
 }

@@ -190,11 +190,11 @@ pub fn print_report(run: &Run) {
             name,
             s.attempts,
             s.successes,
-            (s.time_s + s.facts_time_s) * 1e3,
-            s.points,
-            s.grasps,
-            s.orientations,
-            s.planner_calls
+            s.total_time_s() * 1e3,
+            s.search.points,
+            s.search.grasps,
+            s.search.orientations,
+            s.search.planner_calls
         );
     }
 }
