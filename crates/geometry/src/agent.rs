@@ -481,6 +481,9 @@ pub const NAMED_CHAINS: &[(&str, &[(&str, &str)])] = &[
 pub struct AgentModel {
     name: String,
     source_name: String,
+    /// The URDF text the model was read from (exported with plans so that a checker can compute
+    /// the forward kinematics on its own).
+    urdf: Arc<str>,
     links: Vec<Link>,
     joints: Vec<Joint>,
     link_index: HashMap<String, usize>,
@@ -520,6 +523,11 @@ impl AgentModel {
     /// The file (or other name) the model was loaded from.
     pub fn source_name(&self) -> &str {
         &self.source_name
+    }
+
+    /// The URDF text the model was read from.
+    pub fn urdf(&self) -> &str {
+        &self.urdf
     }
 
     /// All links; index 0 is the root, parents come before children.

@@ -5,17 +5,18 @@
 use std::collections::BTreeMap;
 
 use geometry::world::World;
-use gtp::solution::{SolutionSummary, Trajectory};
+use gtp::solution::SolutionSummary;
 use htn::planner::Outcome;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::{ConvexPolyhedron, Cylinder, SharedShape};
 use serde_json::{Value, json};
 
 use crate::run::Run;
-use crate::timing;
 
-/// Largest joint change between two frames of an exported trajectory (radians or metres).
-const FRAME_STEP: f32 = 0.04;
+mod trajectory;
+
+pub use trajectory::{JointTracker, TimingOptions, joint_limits, joint_positions};
+use trajectory::{TrajectoryContext, trajectory_json};
 
 /// A pose as `{"t": [x, y, z], "q": [x, y, z, w]}`.
 pub fn pose_json(p: Pose) -> Value {
@@ -121,6 +122,8 @@ pub fn scene_json(world: &World) -> Value {
                 "eye_link": model.links().get(a.eye_link).map(|l| l.name.clone()),
                 "links": links,
                 "link_poses": link_poses_json(world, id, world.agent_state(id).link_poses()),
+                "urdf": model.urdf(),
+                "joint_positions": joint_positions(world, id),
             })
         })
         .collect();
@@ -138,177 +141,14 @@ fn link_poses_json(world: &World, agent: geometry::scene::AgentId, poses: &[Pose
     Value::Object(map)
 }
 
-/// The frames of one trajectory, starting from the agent's configuration in `world`: every
-/// link's pose and the held object's pose per frame. Returns the world with the agent at the
-/// trajectory's end.
-/// The gripper moves to the trajectory's opening over its first frames (from where the world
-/// has it), so that frames join up across trajectories and steps.
-const GRIPPER_FRAMES: usize = 5;
-
-fn trajectory_json(world: &World, t: &Trajectory, arm: Option<&gtp::robot::Arm>) -> (Value, World) {
-    let mut world = world.clone();
-    let Some(agent) = world.agent_id(&t.agent) else {
-        return (Value::Null, world);
-    };
-    let model = world.agent(agent).model.clone();
-    // What a held object follows: the robot arm's tool frame, else the tip of the agent's chain
-    // of that name (a person's hand).
-    let tool_link = arm
-        .map(|a| a.tool_link)
-        .or_else(|| attached_link(&world, agent, t))
-        .or_else(|| model.chain(&t.arm).ok().map(|c| c.tip_link));
-    let dof: Vec<Option<usize>> = t
-        .joints
-        .iter()
-        .map(|j| model.dof_names().iter().position(|n| n == j))
-        .collect();
-    // Densify: consecutive waypoints are straight joint-space segments.
-    let mut points: Vec<Vec<f32>> = Vec::new();
-    for w in t.waypoints.windows(2) {
-        let d = w[0]
-            .iter()
-            .zip(&w[1])
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0f32, f32::max);
-        let n = ((d / FRAME_STEP).ceil() as usize).clamp(1, 60);
-        for k in 0..n {
-            let s = k as f32 / n as f32;
-            points.push(
-                w[0].iter()
-                    .zip(&w[1])
-                    .map(|(a, b)| a + (b - a) * s)
-                    .collect(),
-            );
-        }
-    }
-    if let Some(last) = t.waypoints.last() {
-        points.push(last.clone());
-    }
-    let mut frames = Vec::with_capacity(points.len());
-    // The gripper's joint: from its value in the world to the trajectory's opening.
-    let gripper = arm.and_then(|a| a.gripper_dof).map(|k| {
-        let from = world.agent_state(agent).q[k];
-        let to = model.dof_limits()[k].clamp(t.gripper_opening / 2.0);
-        (k, from, to)
-    });
-    for (j, p) in points.iter().enumerate() {
-        let state = world.agent_state(agent);
-        let (mut base, mut q) = (state.base, state.q.clone());
-        if let Some((k, from, to)) = gripper {
-            let s = (j as f32 / GRIPPER_FRAMES as f32).min(1.0);
-            q[k] = from + (to - from) * s;
-        }
-        let (mut bx, mut by, mut byaw) = (base.translation.x, base.translation.y, None);
-        for (i, v) in p.iter().enumerate() {
-            match (
-                t.joints.get(i).map(String::as_str),
-                dof.get(i).copied().flatten(),
-            ) {
-                (Some("base_x"), _) => bx = *v,
-                (Some("base_y"), _) => by = *v,
-                (Some("base_yaw"), _) => byaw = Some(*v),
-                (_, Some(d)) => q[d] = *v,
-                _ => {}
-            }
-        }
-        if t.joints.iter().any(|j| j.starts_with("base_")) {
-            // Base poses are pure turns about z.
-            let yaw = byaw.unwrap_or_else(|| 2.0 * base.rotation.z.atan2(base.rotation.w));
-            base = geometry::world::base_pose(bx, by, yaw);
-        }
-        world.set_agent_config(agent, base, &q);
-        let poses = world.agent_state(agent).link_poses();
-        let held = match (&t.held, tool_link) {
-            (Some(h), Some(link)) => pose_json(poses[link] * Pose::from(h.object_in_tool)),
-            _ => Value::Null,
-        };
-        frames.push(
-            json!({ "link_poses": link_poses_json(&world, agent, poses), "held_pose": held }),
-        );
-    }
-    let value = json!({
-        "agent": t.agent,
-        "label": t.phase,
-        "holding": t.held.as_ref().map(|h| h.object.clone()),
-        "frames": frames,
-        "joint_trajectory": joint_trajectory_json(&model, t),
-    });
-    (value, world)
-}
-
-/// The velocity and acceleration limits of the joint `name` of `model`: the planar base's
-/// defaults for `base_x`, `base_y` and `base_yaw`, else the URDF's velocity limit (or
-/// [`timing::DEFAULT_JOINT_VELOCITY`] where it declares none) and its URDF 1.2 acceleration
-/// limit (or [`timing::DEFAULT_JOINT_ACCELERATION`], as for the shipped models).
-fn joint_limits(model: &geometry::agent::AgentModel, name: &str) -> (f64, f64) {
-    match name {
-        "base_x" | "base_y" => (
-            timing::BASE_LINEAR_VELOCITY,
-            timing::BASE_LINEAR_ACCELERATION,
-        ),
-        "base_yaw" => (
-            timing::BASE_ANGULAR_VELOCITY,
-            timing::BASE_ANGULAR_ACCELERATION,
-        ),
-        _ => {
-            let dof = model.dof_index(name).ok();
-            (
-                dof.and_then(|d| model.dof_velocity_limit(d))
-                    .map_or(timing::DEFAULT_JOINT_VELOCITY, f64::from),
-                dof.and_then(|d| model.dof_acceleration_limit(d))
-                    .map_or(timing::DEFAULT_JOINT_ACCELERATION, f64::from),
-            )
-        }
-    }
-}
-
-/// The timed joint trajectory of `t` (see `docs/plan-json.md`): its waypoints joined by
-/// rest-to-rest trapezoidal profiles within each joint's limits. `null` when the waypoints
-/// cannot be timed (mismatched lengths or non-finite values, which the planner never writes).
-fn joint_trajectory_json(model: &geometry::agent::AgentModel, t: &Trajectory) -> Value {
-    let (velocity, acceleration): (Vec<f64>, Vec<f64>) =
-        t.joints.iter().map(|j| joint_limits(model, j)).unzip();
-    let waypoints: Vec<Vec<f64>> = t
-        .waypoints
-        .iter()
-        .map(|w| w.iter().map(|&x| f64::from(x)).collect())
-        .collect();
-    let Ok(points) = timing::time_path(&waypoints, &velocity, &acceleration) else {
-        return Value::Null;
-    };
-    let points: Vec<Value> = points
-        .into_iter()
-        .map(|p| {
-            json!({
-                "positions": p.positions,
-                "velocities": p.velocities,
-                "time_from_start": p.time,
-            })
-        })
-        .collect();
-    json!({
-        "agent": t.agent,
-        "group": t.arm,
-        "joint_names": t.joints,
-        "velocity_limits": velocity,
-        "acceleration_limits": acceleration,
-        "waypoints": waypoints,
-        "points": points,
-    })
-}
-
-/// The link of `agent` that the object `t` carries is attached to in `world` (a drive carries
-/// what the grippers hold).
-fn attached_link(world: &World, agent: geometry::scene::AgentId, t: &Trajectory) -> Option<usize> {
-    let o = world.object_id(&t.held.as_ref()?.object)?;
-    world
-        .attachment(o)
-        .filter(|a| a.agent == agent)
-        .map(|a| a.link)
-}
-
-/// The plan JSON of a finished run (see `docs/plan-json.md`).
+/// The plan JSON of a finished run (see `docs/plan-json.md`), timed with the default
+/// [`TimingOptions`].
 pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
+    plan_json_with(run, domain, problem, &TimingOptions::default())
+}
+
+/// The plan JSON of a finished run, its joint trajectories timed with `opts`.
+pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptions) -> Value {
     let (status, message) = match &run.result.outcome {
         Outcome::Found { .. } => ("solved", Value::Null),
         Outcome::Unsolvable => ("unsolvable", json!(run.failure_message())),
@@ -323,6 +163,7 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
             tree.push(json!({ "id": d.id, "task": d.task, "args": d.args, "method": d.method, "children": d.subtasks }));
         }
         let mut world = run.initial.clone();
+        let mut tracker = JointTracker::of_world(&world);
         let robot = run.oracle.planner().robot(&world).ok();
         let mut moved: BTreeMap<String, Value> = BTreeMap::new();
         for (i, a) in plan.actions.iter().enumerate() {
@@ -340,7 +181,8 @@ pub fn plan_json(run: &Run, domain: &str, problem: &str) -> Value {
                             .as_ref()
                             .filter(|r| world.agent(r.agent).name() == t.agent)
                             .and_then(|r| r.arms.iter().find(|arm| arm.name == t.arm));
-                        let (v, after) = trajectory_json(&world, t, arm);
+                        let cx = TrajectoryContext { arm, opts };
+                        let (v, after) = trajectory_json(&world, t, &cx, &mut tracker);
                         trajectories.push(v);
                         world = after;
                     }

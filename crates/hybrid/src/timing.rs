@@ -20,10 +20,14 @@ pub const BASE_LINEAR_ACCELERATION: f64 = 0.5;
 /// Acceleration limit of `base_yaw` (rad/s^2).
 pub const BASE_ANGULAR_ACCELERATION: f64 = 1.0;
 
-/// Largest time step between two samples of a segment (s); samples are evenly spaced in time.
+/// Largest time step between two samples of a segment (s; 10 Hz); samples are evenly spaced in
+/// time.
 const SAMPLE_STEP: f64 = 0.1;
+/// Largest change of any joint between two samples (rad or m), so that the link-pose frames
+/// computed from the points are as dense as a swept collision check wants.
+const POSITION_STEP: f64 = 0.04;
 /// Most samples per segment.
-const MAX_SAMPLES: usize = 50;
+const MAX_SAMPLES: usize = 400;
 
 /// One timed point: every joint's position and velocity at `time` seconds from the start.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,7 +114,8 @@ impl Profile {
 /// Times the path through `waypoints` (each one value per joint) within the per-joint
 /// `velocity` and `acceleration` limits, starting and ending at rest and at rest at every
 /// waypoint. Segments where no joint moves are skipped. The points are the waypoints (with their
-/// exact values) and samples between them at most [`SAMPLE_STEP`] apart in time; times strictly
+/// exact values) and samples between them at most [`SAMPLE_STEP`] apart in time and
+/// at most [`POSITION_STEP`] apart in every joint (up to [`MAX_SAMPLES`] per segment); times strictly
 /// increase from 0. An empty path gives no points.
 pub fn time_path(
     waypoints: &[Vec<f64>],
@@ -183,7 +188,12 @@ pub fn time_path(
             continue;
         }
         let start = points.last().map_or(0.0, |p| p.time);
-        let samples = ((profile.duration / SAMPLE_STEP).ceil() as usize).clamp(1, MAX_SAMPLES);
+        // Evenly spaced in time, as many as keep the widest-moving joint's change per sample
+        // within POSITION_STEP at the profile's peak rate.
+        let widest = (0..n).map(|j| (to[j] - from[j]).abs()).fold(0.0, f64::max);
+        let by_time = (profile.duration / SAMPLE_STEP).ceil();
+        let by_step = (widest * profile.peak * profile.duration / POSITION_STEP).ceil();
+        let samples = (by_time.max(by_step) as usize).clamp(1, MAX_SAMPLES);
         for k in 1..samples {
             let t = profile.duration * k as f64 / samples as f64;
             let (s, ds) = profile.at(t);

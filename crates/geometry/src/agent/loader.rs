@@ -482,6 +482,7 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
     Ok(AgentModel {
         name: robot.name.clone(),
         source_name: source_name.to_string(),
+        urdf: Arc::from(text),
         links,
         joints,
         link_index,
