@@ -9,8 +9,10 @@
 
 mod bodies;
 pub mod error;
+pub mod kinematics;
 mod literals;
 pub mod model;
+mod motion;
 mod parse;
 pub mod report;
 mod rest;

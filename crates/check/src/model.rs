@@ -44,6 +44,11 @@ pub struct Agent {
     pub eye: Option<usize>,
     pub links: Vec<Link>,
     pub link_poses: Vec<Pose>,
+    /// The agent's kinematics, read from the `urdf` text when the file carries it.
+    pub kinematics: Option<crate::kinematics::Kinematics>,
+    /// Initial joint values by name (`joint_positions`; the base as `base_x`, `base_y`,
+    /// `base_yaw`); empty when absent.
+    pub joint_positions: std::collections::BTreeMap<String, f64>,
 }
 
 /// One frame of a trajectory: every link's pose, and the held object's pose when holding.
@@ -51,6 +56,8 @@ pub struct Agent {
 pub struct Frame {
     pub link_poses: Vec<Pose>,
     pub held_pose: Option<Pose>,
+    /// Seconds from the trajectory's start (`t`), when declared.
+    pub time: Option<f64>,
 }
 
 /// One trajectory of a GS step.
@@ -76,6 +83,8 @@ pub struct JointTrajectory {
     pub acceleration_limits: Vec<f64>,
     /// The planner's waypoints the points pass through, when declared.
     pub waypoints: Option<Vec<Vec<f64>>>,
+    /// The gripper joint whose position each point gives, when the trajectory moves a gripper.
+    pub gripper_joint: Option<String>,
     pub points: Vec<JointPoint>,
 }
 
@@ -86,6 +95,8 @@ pub struct JointPoint {
     pub velocities: Vec<f64>,
     /// Seconds from the trajectory's start.
     pub time: f64,
+    /// The gripper joint's position (`gripper_position`), when declared.
+    pub gripper: Option<f64>,
 }
 
 /// A literal as the JSON writes it: predicate then arguments.

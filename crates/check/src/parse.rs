@@ -6,6 +6,7 @@ use parry3d::shape::SharedShape;
 use serde_json::Value;
 
 use crate::error::InputError;
+use crate::kinematics::Kinematics;
 use crate::model::{
     Agent, AgentKind, Frame, JointPoint, JointTrajectory, Link, Object, Part, Plan, Step,
     Trajectory,
@@ -274,7 +275,20 @@ fn agent(n: Node) -> Res<Agent> {
         eye: None,
         links,
         link_poses: Vec::new(),
+        kinematics: None,
+        joint_positions: n
+            .opt("joint_positions", |n| {
+                n.entries(|k, v| Ok((k.to_string(), number(v)?)))
+            })?
+            .unwrap_or_default()
+            .into_iter()
+            .collect(),
     };
+    if let Some(text) = n.opt("urdf", |n| n.str())? {
+        let k =
+            Kinematics::from_urdf(&text).map_err(|e| InputError::bad(&join(n.path, "urdf"), e))?;
+        a.kinematics = Some(k);
+    }
     if let Some(eye) = n.opt("eye_link", |n| n.str())? {
         a.eye = Some(a.link(&eye).ok_or_else(|| {
             InputError::bad(&join(n.path, "eye_link"), format!("no link `{eye}`"))
@@ -356,6 +370,7 @@ fn trajectory(n: Node, p: &Plan) -> Res<Trajectory> {
             Ok(Frame {
                 link_poses: f.get("link_poses", |n| link_poses(n, a))?,
                 held_pose: f.opt("held_pose", |n| n.pose())?,
+                time: f.opt("t", number)?,
             })
         })
     })?;
@@ -413,6 +428,7 @@ fn joint_trajectory(n: Node) -> Res<JointTrajectory> {
                 positions: p.get("positions", |n| numbers(n, len))?,
                 velocities: p.get("velocities", |n| numbers(n, len))?,
                 time: p.get("time_from_start", number)?,
+                gripper: p.opt("gripper_position", number)?,
             })
         })
     })?;
@@ -421,6 +437,7 @@ fn joint_trajectory(n: Node) -> Res<JointTrajectory> {
         velocity_limits,
         acceleration_limits,
         waypoints,
+        gripper_joint: n.opt("gripper_joint", |n| n.str())?,
         points,
     })
 }

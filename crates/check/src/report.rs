@@ -26,6 +26,11 @@ pub enum FaultKind {
     /// 0, not at rest at its ends, a velocity or acceleration over its declared limit, or ends
     /// that are not its first and last waypoints.
     Timing,
+    /// A timed trajectory does not start where its agent's previous trajectory (or the scene)
+    /// left one of its joints or its gripper.
+    Discontinuity,
+    /// A frame's link poses are not the forward kinematics of the agent's URDF at its point.
+    Kinematics,
 }
 
 impl FaultKind {
@@ -39,6 +44,8 @@ impl FaultKind {
             FaultKind::StaleLiteral => "stale-literal",
             FaultKind::UndeclaredCarry => "undeclared-carry",
             FaultKind::Timing => "timing",
+            FaultKind::Discontinuity => "discontinuity",
+            FaultKind::Kinematics => "kinematics",
         }
     }
 }
@@ -108,6 +115,11 @@ pub struct Report {
     pub configs: usize,
     /// Literals re-measured.
     pub literals: usize,
+    /// The largest distance of a frame's link origin from the forward kinematics of its point
+    /// (mm), over every frame checked against a URDF.
+    pub kinematics_max_mm: f64,
+    /// The largest angle of a frame's link rotation from the forward kinematics (rad).
+    pub kinematics_max_rad: f64,
 }
 
 impl Report {
@@ -153,6 +165,8 @@ fn plural(k: FaultKind, n: usize) -> String {
     match k {
         FaultKind::Unsupported => "unsupported".to_string(),
         FaultKind::Timing => format!("timing fault{s}"),
+        FaultKind::Kinematics => format!("kinematics fault{s}"),
+        FaultKind::Discontinuity if n != 1 => "discontinuities".to_string(),
         other => format!("{}{s}", other.name()),
     }
 }

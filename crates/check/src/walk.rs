@@ -6,6 +6,7 @@ use crate::Options;
 use crate::bodies::Adjacency;
 use crate::literals::{check_literals, check_persisting};
 use crate::model::{Literal, Plan, Step, Trajectory};
+use crate::motion::Controllers;
 use crate::report::{Fault, FaultKind, Report};
 use crate::rest::check_rest;
 use crate::sweep::{Carry, Sweep};
@@ -25,6 +26,8 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
         frames,
         ..Report::default()
     };
+    let (mut controllers, initial_faults) = Controllers::new(plan);
+    report.faults.extend(initial_faults);
     let mut world = World::initial(plan);
     let mut resting = check_rest(plan, &world, None, opts, &BTreeSet::new(), &mut report);
     // The claimed state, when the plan says where it starts.
@@ -36,6 +39,9 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
         for (k, traj) in step.trajectories.iter().enumerate() {
             let agent = &plan.agents[traj.agent].name;
             report.faults.extend(check_timing(step, k, traj, agent));
+            report
+                .faults
+                .extend(controllers.follow(plan, step, k, traj));
             let ctx = (step, k, &adjacency[traj.agent]);
             run_trajectory(
                 plan,
@@ -64,6 +70,8 @@ pub fn check_plan(plan: &Plan, opts: &Options) -> Report {
             state.extend(&step.added);
         }
     }
+    report.kinematics_max_mm = controllers.largest.0 * 1e3;
+    report.kinematics_max_rad = controllers.largest.1;
     report
 }
 
