@@ -22,6 +22,16 @@ pub fn seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+/// An acceleration limit (`--max-acceleration`): a finite number above 0, at most 1000.
+pub fn acceleration(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 1000.0 => Ok(v),
+        _ => Err(format!(
+            "expected an acceleration in rad/s^2 (or m/s^2), a number above 0 and at most 1000, found `{s}`"
+        )),
+    }
+}
+
 /// A time limit as a `Duration` (the value passed [`seconds`]; clamped to be safe).
 pub fn duration(s: f64) -> Duration {
     Duration::from_secs_f64(s.clamp(0.0, MAX_SECONDS))

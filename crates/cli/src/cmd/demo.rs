@@ -31,6 +31,12 @@ pub struct Args {
     /// Seed of the geometric searches.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Acceleration limit of the plan JSON's timed joint trajectories for every arm joint whose
+    /// URDF declares none (rad/s^2, or m/s^2 for sliding joints; the shipped models declare
+    /// none). The planar base keeps its own limits (docs/plan-json.md).
+    #[arg(long, value_name = "A", default_value_t = hybrid::timing::DEFAULT_JOINT_ACCELERATION,
+          value_parser = crate::input::acceleration)]
+    pub max_acceleration: f64,
 }
 
 /// The bundled `domains/library` folder: beside the working directory, beside the executable's
@@ -87,6 +93,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json: false,
             json_file: Some(json_file.clone()),
             png_dir: Some(args.out.join("pictures")),
+            timing: hybrid::export::TimingOptions {
+                joint_acceleration: args.max_acceleration,
+            },
         },
     )?;
     println!(

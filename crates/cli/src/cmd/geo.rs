@@ -24,6 +24,8 @@ pub struct Outputs {
     pub json_file: Option<PathBuf>,
     /// Write pictures of the world after each GS action into this folder.
     pub png_dir: Option<PathBuf>,
+    /// How the plan JSON's joint trajectories are timed.
+    pub timing: hybrid::export::TimingOptions,
 }
 
 /// A scene file to read, and whether objects that start inside one another may be read with a
@@ -92,7 +94,7 @@ pub fn run_plan(
     )?;
     // The plan JSON holds the whole scene and every trajectory: built only when asked for.
     let json = if out.json || out.json_file.is_some() {
-        hybrid::export::plan_json(&run, &domain.name, &problem.name)
+        hybrid::export::plan_json_with(&run, &domain.name, &problem.name, &out.timing)
     } else {
         serde_json::Value::Null
     };

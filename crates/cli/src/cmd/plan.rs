@@ -64,6 +64,12 @@ pub struct Args {
     /// With --scene: write the plan JSON (docs/plan-json.md) to this file as well.
     #[arg(long, value_name = "FILE", requires = "scene")]
     pub json_out: Option<PathBuf>,
+    /// Acceleration limit of the plan JSON's timed joint trajectories for every arm joint whose
+    /// URDF declares none (rad/s^2, or m/s^2 for sliding joints; the shipped models declare
+    /// none). The planar base keeps its own limits (docs/plan-json.md).
+    #[arg(long, value_name = "A", default_value_t = hybrid::timing::DEFAULT_JOINT_ACCELERATION,
+          value_parser = crate::input::acceleration)]
+    pub max_acceleration: f64,
     /// Turn off duplicate detection (for experiments; the search may not terminate).
     #[arg(long, hide = true)]
     pub no_duplicate_detection: bool,
@@ -157,6 +163,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             json: args.json,
             json_file: args.json_out.clone(),
             png_dir: args.png.clone(),
+            timing: hybrid::export::TimingOptions {
+                joint_acceleration: args.max_acceleration,
+            },
         };
         let scene = crate::cmd::geo::SceneInput {
             path: scene,
