@@ -60,6 +60,8 @@ export interface TreeNode {
 export interface Frame {
   link_poses: Record<string, Pose>;
   held_pose: Pose | null;
+  /** Seconds from the trajectory's start (`t`, the timed point's `time_from_start`); null in older plans. */
+  t: number | null;
 }
 
 export interface Trajectory {
@@ -575,7 +577,12 @@ class Validator {
       const hp = fo['held_pose'] === undefined || fo['held_pose'] === null ? null : this.pose(fo['held_pose'], `${fp}.held_pose`);
       if (lp === null) return null;
       if (holding !== null && hp === null) return this.fail(`${fp}.held_pose`, `missing: the trajectory holds "${holding}"`);
-      frames.push({ link_poses: lp, held_pose: hp });
+      let t: number | null = null;
+      if (fo['t'] !== undefined && fo['t'] !== null) {
+        if (typeof fo['t'] !== 'number' || !Number.isFinite(fo['t']) || fo['t'] < 0) return this.fail(`${fp}.t`, 'expected a finite number of seconds >= 0');
+        t = fo['t'];
+      }
+      frames.push({ link_poses: lp, held_pose: hp, t });
     }
     return { agent: agent.name, label, holding, frames };
   }

@@ -1,11 +1,12 @@
 // The plan as a function of time: which step is current and where every object and link is.
-// Each step lasts as long as its trajectories (played one after the other, frames evenly spaced)
-// or a short pause when it moves nothing; between two frames, poses are interpolated (lerp of
+// Each step lasts as long as its trajectories (played one after the other, each frame at its
+// `t`, the timed point's `time_from_start`; older plans without times: frames evenly spaced) or
+// a short pause when it moves nothing; between two frames, poses are interpolated (lerp of
 // translations, slerp of rotations).
 
 import type { Plan, Pose, Quat, Step, Trajectory, Vec3 } from './plan';
 
-/** Seconds between two consecutive trajectory frames at 1x speed. */
+/** Seconds between two consecutive trajectory frames at 1x speed, for frames without times. */
 export const FRAME_DT = 1 / 20;
 /** How long a step without trajectories (a symbolic action) is shown at 1x speed. */
 export const SYMBOLIC_STEP = 0.8;
@@ -16,6 +17,27 @@ export interface TrajectorySpan {
   trajectory: Trajectory;
   /** Position of the trajectory within its step. */
   index: number;
+  /** Seconds from the trajectory's start at which each frame is shown. */
+  times: number[];
+}
+
+/** The frames' times: their `t` when every frame has one and they increase, else evenly spaced. */
+export function frameTimes(tr: Trajectory): number[] {
+  const ts = tr.frames.map((f) => f.t);
+  const timed = ts.every((t, i) => t !== null && (i === 0 || t > ts[i - 1]!));
+  return timed ? ts.map((t) => t! - ts[0]!) : tr.frames.map((_, i) => i * FRAME_DT);
+}
+
+/** Index `f` of the last frame shown at or before `t` (binary search over increasing times). */
+function frameBefore(times: number[], t: number): number {
+  let lo = 0;
+  let hi = times.length - 1;
+  while (lo < hi) {
+    const mid = (lo + hi + 1) >> 1;
+    if (times[mid]! <= t) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
 }
 
 export interface StepSpan {
@@ -53,8 +75,9 @@ export class Timeline {
       const trajectories: TrajectorySpan[] = [];
       const start = t;
       for (const trajectory of step.gtp?.trajectories ?? []) {
-        const d = FRAME_DT * Math.max(1, trajectory.frames.length - 1);
-        trajectories.push({ start: t, end: t + d, trajectory, index: trajectories.length });
+        const times = frameTimes(trajectory);
+        const d = Math.max(FRAME_DT, times[times.length - 1]!);
+        trajectories.push({ start: t, end: t + d, trajectory, index: trajectories.length, times });
         t += d;
       }
       if (trajectories.length === 0) t += SYMBOLIC_STEP;
@@ -101,11 +124,13 @@ export class Timeline {
         continue;
       }
       if (t < ts.start) break;
-      const u = (t - ts.start) / FRAME_DT;
-      const f = Math.min(Math.floor(u), tr.frames.length - 1);
+      const local = t - ts.start;
+      const f = frameBefore(ts.times, local);
+      const g = Math.min(f + 1, tr.frames.length - 1);
       const a = tr.frames[f]!;
-      const b = tr.frames[Math.min(f + 1, tr.frames.length - 1)]!;
-      const s = u - f;
+      const b = tr.frames[g]!;
+      const gap = ts.times[g]! - ts.times[f]!;
+      const s = gap > 0 ? Math.min(1, (local - ts.times[f]!) / gap) : 0;
       for (const [name, p] of Object.entries(a.link_poses)) links.set(name, interpolate(p, b.link_poses[name] ?? p, s));
       if (tr.holding !== null && a.held_pose !== null) {
         state.objects.set(tr.holding, interpolate(a.held_pose, b.held_pose ?? a.held_pose, s));
@@ -122,7 +147,7 @@ export class Timeline {
     const ts = this.spans[i]?.trajectories[j];
     if (ts === undefined) throw new Error(`step ${i} has no trajectory ${j}`);
     if (f < 0 || f >= ts.trajectory.frames.length) throw new Error(`trajectory ${j} of step ${i} has no frame ${f}`);
-    return ts.start + f * FRAME_DT;
+    return ts.start + ts.times[f]!;
   }
 
   /** Poses the plan says hold after step `i` (objects: declared ones carried forward). */

@@ -234,6 +234,20 @@ describe('the sample plan', () => {
     }
   });
 
+  test("plays each trajectory by its frames' times (time_from_start)", async () => {
+    const times = await hook(page, () => __htngtp.stepTimes());
+    let timed = 0;
+    for (const [i, s] of PLAN.steps.entries()) {
+      const trs = s.gtp?.trajectories ?? [];
+      if (trs.length === 0 || !trs.every((tr) => tr.frames.every((f) => typeof f.t === 'number'))) continue;
+      const want = trs.reduce((d, tr) => d + Math.max(1 / 20, tr.frames.at(-1).t - tr.frames[0].t), 0);
+      assert.ok(Math.abs(times[i].end - times[i].start - want) < 1e-6, `step ${i}: lasts ${times[i].end - times[i].start} s, its frames ${want} s`);
+      timed++;
+    }
+    const anyTimed = PLAN.steps.some((s) => (s.gtp?.trajectories ?? []).some((tr) => tr.frames.some((f) => typeof f.t === 'number')));
+    assert.ok(timed > 0 || !anyTimed, 'no timed step checked');
+  });
+
   test('plays to the end, step by step, and stops at the final state', async () => {
     await hook(page, () => __htngtp.seekTime(0));
     const duration = await hook(page, () => __htngtp.duration);
