@@ -36,6 +36,10 @@ use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
 mod loader;
+pub mod srdf;
+mod xml;
+
+pub use srdf::Semantics;
 
 /// Errors from loading an agent model or from using it with bad names or values.
 #[derive(Debug, thiserror::Error)]
@@ -114,6 +118,18 @@ pub enum ModelError {
         expected: usize,
         /// The length given.
         got: usize,
+    },
+    /// The SRDF (semantic description) is malformed or names what the URDF does not have.
+    #[error("{source_name}:{line}:{col}: {message}")]
+    Srdf {
+        /// The SRDF file.
+        source_name: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        col: usize,
+        /// What is wrong.
+        message: String,
     },
     /// A kinematic chain that cannot be formed.
     #[error("agent model '{model}': chain '{chain}': {message}")]
@@ -453,28 +469,12 @@ pub struct KinematicChain {
     pub dofs: Vec<usize>,
 }
 
-/// Known chain names with their (root link, tip link) candidates, tried in order: the PR2's,
-/// then the human's. A model has the chain when it has both links of a candidate.
-pub const NAMED_CHAINS: &[(&str, &[(&str, &str)])] = &[
-    (
-        "right_arm",
-        &[
-            ("torso_lift_link", "r_gripper_tool_frame"),
-            ("torso_link", "r_hand"),
-        ],
-    ),
-    (
-        "left_arm",
-        &[
-            ("torso_lift_link", "l_gripper_tool_frame"),
-            ("torso_link", "l_hand"),
-        ],
-    ),
-    (
-        "head",
-        &[("torso_lift_link", "head_camera"), ("torso_link", "eye")],
-    ),
-];
+fn read_text(path: &Path) -> Result<String, ModelError> {
+    std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
 
 /// An agent's kinematic tree with collision shapes. Cheap to share behind an `Arc`.
 #[derive(Debug, Clone)]
@@ -484,6 +484,8 @@ pub struct AgentModel {
     /// The URDF text the model was read from (exported with plans so that a checker can compute
     /// the forward kinematics on its own).
     urdf: Arc<str>,
+    /// What the SRDF says the links and joints are for (empty without one).
+    semantics: Arc<Semantics>,
     links: Vec<Link>,
     joints: Vec<Joint>,
     link_index: HashMap<String, usize>,
@@ -500,14 +502,67 @@ pub struct AgentModel {
 }
 
 impl AgentModel {
-    /// Loads a URDF file. Errors name the file and what is wrong; never panics.
+    /// Loads a URDF file, and beside it the SRDF of the same name (`pr2.urdf`, `pr2.srdf`) when
+    /// there is one. Errors name the file and what is wrong; never panics.
     pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<AgentModel, ModelError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Self::from_urdf_str(&text, &path.display().to_string())
+        let text = read_text(path)?;
+        let model = Self::from_urdf_str(&text, &path.display().to_string())?;
+        let srdf = path.with_extension("srdf");
+        if srdf.is_file() {
+            return model.with_srdf_file(&srdf);
+        }
+        Ok(model)
+    }
+
+    /// This model with the semantic description in the SRDF file `path`.
+    pub fn with_srdf_file(self, path: impl AsRef<Path>) -> Result<AgentModel, ModelError> {
+        let path = path.as_ref();
+        let text = read_text(path)?;
+        self.with_srdf_str(&text, &path.display().to_string())
+    }
+
+    /// This model with the semantic description in SRDF `text` (`source_name` for errors).
+    pub fn with_srdf_str(
+        mut self,
+        text: &str,
+        source_name: &str,
+    ) -> Result<AgentModel, ModelError> {
+        self.semantics = Arc::new(srdf::read(text, source_name, &self)?);
+        Ok(self)
+    }
+
+    /// What the SRDF says (empty when the model has none).
+    pub fn semantics(&self) -> &Semantics {
+        &self.semantics
+    }
+
+    /// The arms the SRDF declares (groups ending in an end effector), in its order.
+    pub fn arm_names(&self) -> Vec<String> {
+        self.semantics
+            .arms()
+            .into_iter()
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// The configuration index of the one joint of SRDF group `group` (`torso_lift`, ...).
+    pub fn group_dof(&self, group: &str) -> Option<usize> {
+        let g = self.semantics.group(group)?;
+        g.joints.iter().find_map(|j| self.dof_index(j).ok())
+    }
+
+    /// The values of the SRDF's posture `name`, by configuration index.
+    pub fn posture(&self, name: &str) -> Vec<(usize, f32)> {
+        self.semantics
+            .group_state(name)
+            .map(|s| {
+                s.values
+                    .iter()
+                    .filter_map(|(j, v)| self.dof_index(j).ok().map(|d| (d, *v)))
+                    .collect()
+            })
+            .unwrap_or_default()
     }
 
     /// Loads URDF text; `source_name` (a file name, usually) is used in error messages.
@@ -694,29 +749,33 @@ impl AgentModel {
         None
     }
 
-    /// The serial chain called `name`: one of [`NAMED_CHAINS`] (`right_arm`, `left_arm`, `head`),
-    /// using the first (root, tip) candidate whose links this model has. For the PR2 the arms run
-    /// from `torso_lift_link` (shoulder pan first) to `r_/l_gripper_tool_frame`; for the human
-    /// from `torso_link` (shoulder pitch first) to `r_/l_hand`.
+    /// The serial chain of the SRDF group called `name` (an arm such as `right_arm`, or
+    /// `head`), from its `base_link` to its `tip_link`.
     pub fn chain(&self, name: &str) -> Result<KinematicChain, ModelError> {
         let err = |message: String| ModelError::Chain {
             model: self.name.clone(),
             chain: name.to_string(),
             message,
         };
-        let (_, candidates) = NAMED_CHAINS
-            .iter()
-            .find(|(n, _)| *n == name)
+        let (root, tip) = self
+            .semantics
+            .group(name)
+            .and_then(|g| g.chain.as_ref())
             .ok_or_else(|| {
-                let known: Vec<&str> = NAMED_CHAINS.iter().map(|(n, _)| *n).collect();
-                err(format!("unknown chain name; known: {}", known.join(", ")))
-            })?;
-        let (root, tip) = candidates
-            .iter()
-            .find(|(r, t)| self.link_index.contains_key(*r) && self.link_index.contains_key(*t))
-            .ok_or_else(|| {
+                let known: Vec<&str> = self
+                    .semantics
+                    .groups
+                    .iter()
+                    .filter(|g| g.chain.is_some())
+                    .map(|g| g.name.as_str())
+                    .collect();
                 err(format!(
-                    "the model has none of the (root, tip) links {candidates:?}"
+                    "no SRDF group of that name with a <chain> (chains: {})",
+                    if known.is_empty() {
+                        "none; the model has no SRDF".to_string()
+                    } else {
+                        known.join(", ")
+                    }
                 ))
             })?;
         let mut chain = self.chain_between(root, tip)?;
@@ -778,26 +837,4 @@ pub(crate) fn random_in(l: &JointLimits, rng: &mut fastrand::Rng) -> f32 {
         (-std::f32::consts::PI, std::f32::consts::PI)
     };
     lo + (hi - lo) * rng.f32()
-}
-
-/// Named postures of the project's human model (`models/human.urdf`): joint values to give
-/// [`Configuration::set_many`]. Joints not named stay at 0 (arms hanging, head straight).
-pub mod human_postures {
-    /// Sitting on a chair (the zero configuration): pelvis at 0.50 m, eyes at 1.20 m,
-    /// shoulders at 1.00 m, thighs horizontal, shins vertical.
-    pub const SITTING: &[(&str, f32)] = &[
-        ("pelvis_lift_joint", 0.0),
-        ("r_hip_joint", 0.0),
-        ("l_hip_joint", 0.0),
-        ("r_knee_joint", 0.0),
-        ("l_knee_joint", 0.0),
-    ];
-    /// Standing: pelvis at 0.90 m, eyes at 1.60 m, shoulders at 1.40 m, legs straight.
-    pub const STANDING: &[(&str, f32)] = &[
-        ("pelvis_lift_joint", 0.40),
-        ("r_hip_joint", std::f32::consts::FRAC_PI_2),
-        ("l_hip_joint", std::f32::consts::FRAC_PI_2),
-        ("r_knee_joint", -std::f32::consts::FRAC_PI_2),
-        ("l_knee_joint", -std::f32::consts::FRAC_PI_2),
-    ];
 }

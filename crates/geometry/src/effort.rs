@@ -16,7 +16,7 @@
 //! 1 and above the head is free: visibility checks aim it at the target within its joint limits
 //! ([`aim_head`]).
 
-use std::f32::consts::{FRAC_PI_2, PI};
+use std::f32::consts::PI;
 
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::query::intersection_test;
@@ -94,8 +94,8 @@ pub struct EffortParams {
     pub footprint_height: f32,
 }
 
-fn range(model: &AgentModel, name: &str, limit: Option<f32>) -> Option<JointRange> {
-    let dof = model.dof_index(name).ok()?;
+fn range(model: &AgentModel, dof: Option<usize>, limit: Option<f32>) -> Option<JointRange> {
+    let dof = dof?;
     let l = model.dof_limits()[dof];
     let (mut lower, mut upper) = if l.is_bounded() {
         (l.lower, l.upper)
@@ -110,9 +110,9 @@ fn range(model: &AgentModel, name: &str, limit: Option<f32>) -> Option<JointRang
 }
 
 impl EffortParams {
-    /// Effort parameters for an agent of the scene: joints found by their conventional names
-    /// (`head_pan_joint`, `head_tilt_joint`, `torso_yaw_joint`, `torso_pitch_joint`,
-    /// `torso_lift_joint`; standing = `pelvis_lift_joint` 0.4, hips 1.5708, knees -1.5708), limits
+    /// Effort parameters for an agent of the scene: joints found by the model's SRDF (the
+    /// `head` group's first two movable joints pan and tilt; the groups `torso_yaw`,
+    /// `torso_pitch`, `torso_lift`; a seated person stands up to the `standing` posture), limits
     /// from the URDF, narrowed by the scene's overrides.
     pub fn for_agent(spec: &AgentSpecResolved, model: &AgentModel) -> EffortParams {
         let e = &spec.effort;
@@ -120,24 +120,17 @@ impl EffortParams {
         let rad = |d: Option<f32>| d.map(f32::to_radians);
         let mut posture_switch = Vec::new();
         if human && spec.sitting {
-            for (n, v) in [
-                ("pelvis_lift_joint", 0.4),
-                ("r_hip_joint", FRAC_PI_2),
-                ("l_hip_joint", FRAC_PI_2),
-                ("r_knee_joint", -FRAC_PI_2),
-                ("l_knee_joint", -FRAC_PI_2),
-            ] {
-                if let Ok(k) = model.dof_index(n) {
-                    posture_switch.push((k, model.dof_limits()[k].clamp(v)));
-                }
+            for (k, v) in model.posture("standing") {
+                posture_switch.push((k, model.dof_limits()[k].clamp(v)));
             }
         }
+        let head = model.chain("head").map(|c| c.dofs).unwrap_or_default();
         let lean = rad(e.lean_deg).unwrap_or(60f32.to_radians());
         EffortParams {
-            head_pan: range(model, "head_pan_joint", rad(e.head_pan_deg)),
-            head_tilt: range(model, "head_tilt_joint", None),
-            torso_yaw: range(model, "torso_yaw_joint", rad(e.torso_turn_deg)),
-            torso_pitch: range(model, "torso_pitch_joint", None).map(|mut r| {
+            head_pan: range(model, head.first().copied(), rad(e.head_pan_deg)),
+            head_tilt: range(model, head.get(1).copied(), None),
+            torso_yaw: range(model, model.group_dof("torso_yaw"), rad(e.torso_turn_deg)),
+            torso_pitch: range(model, model.group_dof("torso_pitch"), None).map(|mut r| {
                 r.lower = r.lower.max(0.0);
                 r.upper = r.upper.min(lean).max(r.lower);
                 r
@@ -147,7 +140,7 @@ impl EffortParams {
             lift: if human {
                 None
             } else {
-                range(model, "torso_lift_joint", None)
+                range(model, model.group_dof("torso_lift"), None)
             },
             move_radius: e.move_radius.unwrap_or(3.0),
             move_step: 0.25,

@@ -179,12 +179,12 @@ pub fn reachable_effort(
     None
 }
 
-/// Whether an arm of the agent (the `right_arm` / `left_arm` chains of its model) can put its
+/// Whether an arm of the agent (the arms of its model's SRDF) can put its
 /// hand frame on the object's surface point nearest the arm's root, from this stance.
 fn ik_confirms(world: &World, agent: AgentId, base: Pose, q: &[f32], object: ObjectId) -> bool {
     let model = &world.agent(agent).model;
     let mut rng = fastrand::Rng::with_seed(0x5eed);
-    ["right_arm", "left_arm"].iter().any(|name| {
+    model.arm_names().iter().any(|name| {
         model
             .chain(name)
             .is_ok_and(|chain| arm_reach(world, agent, &chain, base, q, object, &mut rng).is_some())

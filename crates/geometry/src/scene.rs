@@ -187,6 +187,8 @@ struct AgentSpec {
     name: String,
     kind: KindSpec,
     urdf: String,
+    /// The semantic description (SRDF); default: the URDF's path with the extension `.srdf`.
+    srdf: Option<String>,
     #[serde(default)]
     base: BaseSpec,
     /// Joint values by URDF joint name (radians, metres for prismatic joints).
@@ -302,6 +304,8 @@ pub struct AgentSpecResolved {
     pub kind: AgentKind,
     /// Absolute (or scene-relative resolved) path of the URDF file.
     pub urdf: PathBuf,
+    /// The SRDF file, when there is one (given, or beside the URDF with the same name).
+    pub srdf: Option<PathBuf>,
     /// Base pose on the floor: x, y (metres), yaw (radians).
     pub base: [f32; 3],
     /// Joint values by name, as written.
@@ -504,6 +508,19 @@ impl Scene {
                     format!("URDF file `{}` not found", urdf.display()),
                 ));
             }
+            let srdf = match &a.srdf {
+                Some(p) => {
+                    let p = base_dir.join(p);
+                    if !p.is_file() {
+                        return Err(ck.err(
+                            &format!("{at}.srdf"),
+                            format!("SRDF file `{}` not found", p.display()),
+                        ));
+                    }
+                    Some(p)
+                }
+                None => Some(urdf.with_extension("srdf")).filter(|p| p.is_file()),
+            };
             ck.finite(&[a.base.yaw], &format!("{at}.base.yaw"))?;
             ck.coords(&[a.base.x, a.base.y], &format!("{at}.base"))?;
             for (j, v) in &a.joints {
@@ -545,6 +562,7 @@ impl Scene {
                     KindSpec::Human => AgentKind::Human,
                 },
                 urdf,
+                srdf,
                 base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
                 joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
                 eye: a.eye.clone(),

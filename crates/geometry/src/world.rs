@@ -18,7 +18,7 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
-use crate::agent::AgentModel;
+use crate::agent::{AgentModel, KinematicChain};
 use crate::effort::EffortParams;
 use crate::scene::{
     AgentId, AgentKind, AgentSpecResolved, ObjectId, ObjectModel, Scene, SceneError,
@@ -149,8 +149,14 @@ pub fn base_pose(x: f32, y: f32, yaw: f32) -> Pose {
     Pose::from_parts(Vector::new(x, y, 0.0), Rotation::from_rotation_z(yaw))
 }
 
-fn find_link(model: &AgentModel, names: &[&str]) -> Option<usize> {
-    names.iter().find_map(|n| model.link_id(n).ok())
+/// The URDF text of an agent of `scene`.
+fn read_model(path: &Path, scene: &Scene, at: &str) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| {
+        scene.error(
+            &format!("{at}.urdf"),
+            format!("cannot read `{}`: {e}", path.display()),
+        )
+    })
 }
 
 /// How closely [`World::fingerprint`] tells worlds apart.
@@ -199,8 +205,17 @@ impl World {
         let mut states = Vec::with_capacity(scene.agents.len());
         for (i, spec) in scene.agents.iter().enumerate() {
             let at = format!("agents[{i}]");
-            let model = AgentModel::from_urdf_file(&spec.urdf)
-                .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            let model = AgentModel::from_urdf_str(
+                &read_model(&spec.urdf, &scene, &at)?,
+                &spec.urdf.display().to_string(),
+            )
+            .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            let model = match &spec.srdf {
+                Some(path) => model
+                    .with_srdf_file(path)
+                    .map_err(|e| scene.error(&format!("{at}.srdf"), e.to_string()))?,
+                None => model,
+            };
             let mut q = model.default_configuration().into_vec();
             for (name, v) in &spec.joints {
                 let k = model.dof_index(name).map_err(|_| {
@@ -236,61 +251,40 @@ impl World {
             let human = spec.kind == AgentKind::Human;
             let eye_link = match &spec.eye {
                 Some(n) => link("eye", n)?,
-                None => find_link(
-                    &model,
-                    &["head_camera", "eye", "head_camera_link", "head_tilt_link"],
-                )
-                .ok_or_else(|| {
-                    scene.error(&at, "no eye link found (name it with `eye = \"LINK\"`)")
+                None => model.chain("head").map(|c| c.tip_link).map_err(|_| {
+                    scene.error(
+                        &at,
+                        "no eye link: give the model an SRDF `head` group whose chain ends at the eye or camera, or name it with `eye = \"LINK\"`",
+                    )
                 })?,
             };
-            let links_or =
-                |key: &str, given: &Option<Vec<String>>, defaults: &[&[&str]]| match given {
-                    Some(list) => list
-                        .iter()
-                        .map(|n| link(key, n))
-                        .collect::<Result<Vec<_>, _>>(),
-                    None => {
-                        let found: Vec<usize> = defaults
-                            .iter()
-                            .filter_map(|alts| find_link(&model, alts))
-                            .collect();
-                        if found.is_empty() {
-                            Err(scene.error(
-                                &at,
-                                format!("no {key} links found (name them with `{key} = [..]`)"),
-                            ))
-                        } else {
-                            Ok(found)
-                        }
-                    }
-                };
-            let shoulder_links = links_or(
-                "shoulders",
-                &spec.shoulders,
-                &[
-                    &[
-                        "r_shoulder_pan_link",
-                        "r_shoulder_pitch_link",
-                        "r_shoulder_link",
-                        "right_shoulder",
-                    ],
-                    &[
-                        "l_shoulder_pan_link",
-                        "l_shoulder_pitch_link",
-                        "l_shoulder_link",
-                        "left_shoulder",
-                    ],
-                ],
-            )?;
-            let hand_links = links_or(
-                "hands",
-                &spec.hands,
-                &[
-                    &["r_gripper_tool_frame", "r_hand", "right_hand"],
-                    &["l_gripper_tool_frame", "l_hand", "left_hand"],
-                ],
-            )?;
+            let arms: Vec<KinematicChain> = model
+                .arm_names()
+                .iter()
+                .filter_map(|a| model.chain(a).ok())
+                .collect();
+            let links_or = |key: &str, given: &Option<Vec<String>>, found: Vec<usize>| {
+                match given {
+                Some(list) => list
+                    .iter()
+                    .map(|n| link(key, n))
+                    .collect::<Result<Vec<_>, _>>(),
+                None if found.is_empty() => Err(scene.error(
+                    &at,
+                    format!("no {key} links: give the model an SRDF with arms (groups ending in an `end_effector`), or name them with `{key} = [..]`"),
+                )),
+                None => Ok(found),
+            }
+            };
+            // A shoulder is the link its arm's first movable joint turns; a hand, the arm's tip.
+            let shoulders = arms
+                .iter()
+                .filter_map(|c| c.joints.iter().find(|&&j| model.joints()[j].is_movable()))
+                .map(|&j| model.joints()[j].child)
+                .collect();
+            let shoulder_links = links_or("shoulders", &spec.shoulders, shoulders)?;
+            let hands = arms.iter().map(|c| c.tip_link).collect();
+            let hand_links = links_or("hands", &spec.hands, hands)?;
             let fov = spec.fov.unwrap_or(if human {
                 // Attention field of a person (facts: 120 deg, vertical 0.75 of it).
                 [120f32.to_radians(), 90f32.to_radians()]

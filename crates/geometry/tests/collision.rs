@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use geometry::agent::{AgentModel, human_postures};
+use geometry::agent::AgentModel;
 use geometry::collision::{
     AllowedReason, CollisionChecker, Contact, HeldObject, Obstacle, SelfCollisionModel,
     SelfCollisionOptions, StaticObstacles,
@@ -52,9 +52,9 @@ fn zero_configurations_and_postures_are_free() {
         Arc::new(StaticObstacles::empty()),
         Pose::IDENTITY,
     );
-    for posture in [human_postures::SITTING, human_postures::STANDING] {
+    for name in ["sitting", "standing"] {
         let mut q = h.model().default_configuration();
-        q.set_many(posture).unwrap();
+        q.set_many(&posture(h.model(), name)).unwrap();
         assert_eq!(c.collisions(q.as_slice()), vec![]);
     }
 }
@@ -451,4 +451,13 @@ fn the_two_held_objects_are_checked_against_each_other() {
     };
     assert!(pair(&checker(0.01)), "{:?}", checker(0.01).collisions(&q));
     assert!(!pair(&checker(0.2)), "{:?}", checker(0.2).collisions(&q));
+}
+
+/// The SRDF posture `name` of `model`, as `Configuration::set_many` takes it.
+fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
+    let state = model
+        .semantics()
+        .group_state(name)
+        .unwrap_or_else(|| panic!("the SRDF has no posture {name}"));
+    state.values.iter().map(|(j, v)| (j.as_str(), *v)).collect()
 }

@@ -1,7 +1,7 @@
 //! Forward kinematics with known answers (hand-computed from the joint origins in
 //! `models/pr2.urdf` and `models/human.urdf`).
 
-use geometry::agent::{AgentModel, human_postures};
+use geometry::agent::AgentModel;
 use parry3d::math::{Pose, Rotation, Vector};
 
 fn model(name: &str) -> AgentModel {
@@ -139,7 +139,7 @@ fn pr2_gripper_fingers_mimic() {
 fn human_eye_and_shoulders_sitting_and_standing() {
     let human = model("human.urdf");
     let mut q = human.default_configuration();
-    q.set_many(human_postures::SITTING).unwrap();
+    q.set_many(&posture(&human, "sitting")).unwrap();
     let eye = human
         .link_pose(Pose::IDENTITY, q.as_slice(), "eye")
         .unwrap();
@@ -152,7 +152,7 @@ fn human_eye_and_shoulders_sitting_and_standing() {
         close(sh.translation, Vector::new(0.0, -0.2, 1.0), 1e-5),
         "{sh:?}"
     );
-    q.set_many(human_postures::STANDING).unwrap();
+    q.set_many(&posture(&human, "standing")).unwrap();
     let eye = human
         .link_pose(Pose::IDENTITY, q.as_slice(), "eye")
         .unwrap();
@@ -351,4 +351,13 @@ mod ik {
             .unwrap();
         assert!((got.translation - target.translation).length() < 1e-3);
     }
+}
+
+/// The SRDF posture `name` of `model`, as `Configuration::set_many` takes it.
+fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
+    let state = model
+        .semantics()
+        .group_state(name)
+        .unwrap_or_else(|| panic!("the SRDF has no posture {name}"));
+    state.values.iter().map(|(j, v)| (j.as_str(), *v)).collect()
 }

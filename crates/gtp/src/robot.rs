@@ -101,7 +101,7 @@ impl RobotSetup {
         (centre, spread + reach + margin)
     }
 
-    /// The first robot agent of the world, with the arms named `right_arm` and `left_arm`.
+    /// The first robot agent of the world, with the arms its SRDF declares.
     pub fn new(world: &World) -> Result<RobotSetup, String> {
         let agent = world
             .agent_ids()
@@ -110,7 +110,7 @@ impl RobotSetup {
         RobotSetup::for_agent(world, agent)
     }
 
-    /// Any agent's arms (`right_arm`, `left_arm`), for motion planning: the robot's, or a
+    /// Any agent's arms (as its SRDF declares them), for motion planning: the robot's, or a
     /// person's in a hand-over (their hand frame is the tool frame; no gripper joint).
     pub fn for_agent(world: &World, agent: AgentId) -> Result<RobotSetup, String> {
         let model = world.agent(agent).model.clone();
@@ -119,16 +119,18 @@ impl RobotSetup {
             &SelfCollisionOptions::default(),
         ));
         let mut arms = Vec::new();
-        for name in ["right_arm", "left_arm"] {
-            let Ok(chain) = model.chain(name) else {
+        for name in model.arm_names() {
+            let Ok(chain) = model.chain(&name) else {
                 continue;
             };
             let tool_link = chain.tip_link;
-            let palm = model.geometric_ancestor(tool_link).unwrap_or(tool_link);
-            let gripper_dof = (0..model.dof()).find(|&k| {
-                let j = &model.joints()[model.dof_joint(k)];
-                !chain.dofs.contains(&k) && j.mimic.is_none() && model.is_descendant(j.child, palm)
-            });
+            // The gripper's joint: the first joint of the arm's end-effector group that mimics
+            // none (a person's hand has none).
+            let gripper_dof = model
+                .semantics()
+                .end_effector(&name)
+                .and_then(|e| model.semantics().group(&e.group))
+                .and_then(|g| g.joints.iter().find_map(|j| model.dof_index(j).ok()));
             let limits = model.dof_limits();
             let space = JointSpace::new(
                 &chain
@@ -178,7 +180,7 @@ impl RobotSetup {
             arms.push(Arm {
                 wrist_to_tool,
                 wrist_reach,
-                name: name.to_string(),
+                name,
                 tool_link_name: model.links()[tool_link].name.clone(),
                 chain,
                 tool_link,

@@ -483,6 +483,7 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
         name: robot.name.clone(),
         source_name: source_name.to_string(),
         urdf: Arc::from(text),
+        semantics: Arc::default(),
         links,
         joints,
         link_index,

@@ -1,0 +1,286 @@
+//! The semantic description of an agent, read from MoveIt's SRDF format: which links and joints
+//! make the arms, the hands or grippers, the head (eyes) and the torso, the named postures and
+//! the link pairs that may touch. Nothing in the code names a link or joint of a particular robot
+//! or person: it asks the SRDF.
+//!
+//! Elements read (others, such as `virtual_joint` or `passive_joint`, are ignored):
+//! * `<group name="..">` with `<chain base_link=".." tip_link=".."/>`, `<joint name=".."/>`,
+//!   `<link name=".."/>`. Groups htngtp gives a meaning to: an **arm** is any group that an
+//!   `end_effector` names as its `parent_group` (its chain runs from the shoulder's parent to the
+//!   tool frame or hand); `head`: a chain whose tip is the eye or camera link, its first two
+//!   movable joints pan and tilt; `torso_yaw`, `torso_pitch`, `torso_lift`: one joint each.
+//! * `<end_effector name=".." parent_link=".." group=".." parent_group=".."/>`: the hand or
+//!   gripper of the arm `parent_group`; its `group`'s first joint that mimics none is the
+//!   gripper's joint (none for a person's hand).
+//! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
+//!   (`standing` for a person who may stand up, the effort level that allows it).
+//! * `<disable_collisions link1=".." link2=".." reason=".."/>`: link pairs that may touch.
+//!
+//! Every name is checked against the URDF model; errors say `file:line:col`.
+
+use super::xml::{self, Element, Pos};
+use super::{AgentModel, ModelError};
+
+/// A group of joints and links.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Group {
+    pub name: String,
+    /// `(base_link, tip_link)` of its chain, if it has one.
+    pub chain: Option<(String, String)>,
+    pub joints: Vec<String>,
+    pub links: Vec<String>,
+}
+
+/// A hand or gripper at the end of an arm.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EndEffector {
+    pub name: String,
+    /// The tool frame (where a held object is carried).
+    pub parent_link: String,
+    /// The group of the gripper's joints.
+    pub group: String,
+    /// The arm it ends.
+    pub parent_group: Option<String>,
+}
+
+/// A named posture of a group.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GroupState {
+    pub name: String,
+    pub group: String,
+    /// Joint values (radians or metres), in document order.
+    pub values: Vec<(String, f32)>,
+}
+
+/// Everything an SRDF declares that htngtp uses.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Semantics {
+    /// The file it was read from (empty when none was).
+    pub source_name: String,
+    pub groups: Vec<Group>,
+    pub end_effectors: Vec<EndEffector>,
+    pub group_states: Vec<GroupState>,
+    /// `(link1, link2)` pairs that may touch.
+    pub disabled_collisions: Vec<(String, String)>,
+}
+
+impl Semantics {
+    /// The group called `name`.
+    pub fn group(&self, name: &str) -> Option<&Group> {
+        self.groups.iter().find(|g| g.name == name)
+    }
+
+    /// The arms: the groups an end effector names as its parent, in document order.
+    pub fn arms(&self) -> Vec<&str> {
+        let mut out: Vec<&str> = Vec::new();
+        for e in &self.end_effectors {
+            if let Some(p) = e.parent_group.as_deref().filter(|p| !out.contains(p)) {
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    /// The end effector at the end of arm `arm`.
+    pub fn end_effector(&self, arm: &str) -> Option<&EndEffector> {
+        self.end_effectors
+            .iter()
+            .find(|e| e.parent_group.as_deref() == Some(arm))
+    }
+
+    /// The posture called `name`, if declared.
+    pub fn group_state(&self, name: &str) -> Option<&GroupState> {
+        self.group_states.iter().find(|s| s.name == name)
+    }
+}
+
+/// Where an SRDF is read from, for errors.
+struct Source<'a> {
+    name: &'a str,
+}
+
+impl Source<'_> {
+    fn err(&self, at: Pos, message: impl Into<String>) -> ModelError {
+        ModelError::Srdf {
+            source_name: self.name.to_string(),
+            line: at.line,
+            col: at.col,
+            message: message.into(),
+        }
+    }
+
+    /// Attribute `key` of `e`, or an error naming the element.
+    fn attr<'e>(&self, e: &'e Element, key: &str) -> Result<(&'e str, Pos), ModelError> {
+        e.attr(key)
+            .ok_or_else(|| self.err(e.at, format!("`<{}>` needs a `{key}` attribute", e.name)))
+    }
+}
+
+/// Reads SRDF `text` for `model`; `source_name` names it in errors.
+pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semantics, ModelError> {
+    let src = Source { name: source_name };
+    let root = xml::parse(text).map_err(|e| src.err(e.at, e.message))?;
+    if root.name != "robot" {
+        return Err(src.err(
+            root.at,
+            format!("expected `<robot>`, found `<{}>`", root.name),
+        ));
+    }
+    if let Some((name, at)) = root.attr("name").filter(|(n, _)| *n != model.name()) {
+        return Err(src.err(
+            at,
+            format!("this SRDF describes `{name}`, the URDF `{}`", model.name()),
+        ));
+    }
+    let mut s = Semantics {
+        source_name: source_name.to_string(),
+        ..Semantics::default()
+    };
+    for e in &root.children {
+        match e.name.as_str() {
+            "group" => s.groups.push(group(&src, e, model)?),
+            "end_effector" => s.end_effectors.push(end_effector(&src, e, model)?),
+            "group_state" => s.group_states.push(group_state(&src, e, model)?),
+            "disable_collisions" => {
+                let (a, pa) = src.attr(e, "link1")?;
+                let (b, pb) = src.attr(e, "link2")?;
+                known_link(&src, model, a, pa)?;
+                known_link(&src, model, b, pb)?;
+                s.disabled_collisions.push((a.to_string(), b.to_string()));
+            }
+            _ => {}
+        }
+    }
+    cross_check(&src, &root, &s)?;
+    Ok(s)
+}
+
+fn known_link(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<(), ModelError> {
+    model.link_id(name).map(|_| ()).map_err(|_| {
+        src.err(
+            at,
+            format!("unknown link `{name}` (not in {})", model.source_name()),
+        )
+    })
+}
+
+fn known_joint(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<usize, ModelError> {
+    model.joint_id(name).ok_or_else(|| {
+        src.err(
+            at,
+            format!("unknown joint `{name}` (not in {})", model.source_name()),
+        )
+    })
+}
+
+fn group(src: &Source, e: &Element, model: &AgentModel) -> Result<Group, ModelError> {
+    let mut g = Group {
+        name: src.attr(e, "name")?.0.to_string(),
+        ..Group::default()
+    };
+    for c in &e.children {
+        match c.name.as_str() {
+            "chain" => {
+                let (base, pb) = src.attr(c, "base_link")?;
+                let (tip, pt) = src.attr(c, "tip_link")?;
+                known_link(src, model, base, pb)?;
+                known_link(src, model, tip, pt)?;
+                model
+                    .chain_between(base, tip)
+                    .map_err(|err| src.err(c.at, err.to_string()))?;
+                g.chain = Some((base.to_string(), tip.to_string()));
+            }
+            "joint" => {
+                let (name, at) = src.attr(c, "name")?;
+                known_joint(src, model, name, at)?;
+                g.joints.push(name.to_string());
+            }
+            "link" => {
+                let (name, at) = src.attr(c, "name")?;
+                known_link(src, model, name, at)?;
+                g.links.push(name.to_string());
+            }
+            _ => {}
+        }
+    }
+    Ok(g)
+}
+
+fn end_effector(src: &Source, e: &Element, model: &AgentModel) -> Result<EndEffector, ModelError> {
+    let (parent_link, at) = src.attr(e, "parent_link")?;
+    known_link(src, model, parent_link, at)?;
+    Ok(EndEffector {
+        name: src.attr(e, "name")?.0.to_string(),
+        parent_link: parent_link.to_string(),
+        group: src.attr(e, "group")?.0.to_string(),
+        parent_group: e.attr("parent_group").map(|(g, _)| g.to_string()),
+    })
+}
+
+fn group_state(src: &Source, e: &Element, model: &AgentModel) -> Result<GroupState, ModelError> {
+    let mut s = GroupState {
+        name: src.attr(e, "name")?.0.to_string(),
+        group: src.attr(e, "group")?.0.to_string(),
+        values: Vec::new(),
+    };
+    for c in e.children.iter().filter(|c| c.name == "joint") {
+        let (name, at) = src.attr(c, "name")?;
+        let j = known_joint(src, model, name, at)?;
+        let (text, vat) = src.attr(c, "value")?;
+        let value: f32 = text
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f32| v.is_finite())
+            .ok_or_else(|| src.err(vat, format!("joint `{name}`: `{text}` is not a number")))?;
+        let Some(dof) = model.joints()[j].dof else {
+            return Err(src.err(
+                at,
+                format!("joint `{name}` is fixed or mimics another: it takes no value"),
+            ));
+        };
+        let lim = model.dof_limits()[dof];
+        if !lim.contains(value) {
+            return Err(src.err(
+                vat,
+                format!(
+                    "joint `{name}`: {value} is outside its limits {} ..= {}",
+                    lim.lower, lim.upper
+                ),
+            ));
+        }
+        s.values.push((name.to_string(), value));
+    }
+    Ok(s)
+}
+
+/// Group names used by end effectors and group states must be declared.
+fn cross_check(src: &Source, root: &Element, s: &Semantics) -> Result<(), ModelError> {
+    let declared = |name: &str| s.group(name).is_some();
+    for e in root.children.iter().filter(|e| e.name == "end_effector") {
+        for key in ["group", "parent_group"] {
+            if let Some((g, at)) = e.attr(key).filter(|(g, _)| !declared(g)) {
+                return Err(src.err(at, format!("no group `{g}` is declared")));
+            }
+        }
+    }
+    for e in root.children.iter().filter(|e| e.name == "group_state") {
+        if let Some((g, at)) = e.attr("group").filter(|(g, _)| !declared(g)) {
+            return Err(src.err(at, format!("no group `{g}` is declared")));
+        }
+    }
+    for arm in s.arms() {
+        if s.group(arm).and_then(|g| g.chain.as_ref()).is_none() {
+            let at = root
+                .children
+                .iter()
+                .find(|e| e.attr("name").is_some_and(|(n, _)| n == arm))
+                .map_or(root.at, |e| e.at);
+            return Err(src.err(
+                at,
+                format!("group `{arm}` ends in an end effector, so it must be a `<chain>`"),
+            ));
+        }
+    }
+    Ok(())
+}
