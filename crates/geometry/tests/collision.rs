@@ -461,3 +461,27 @@ fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
         .unwrap_or_else(|| panic!("the SRDF has no posture {name}"));
     state.values.iter().map(|(j, v)| (j.as_str(), *v)).collect()
 }
+
+/// A pair the SRDF's `<disable_collisions>` names is left out, with that reason.
+#[test]
+fn srdf_disabled_pairs_are_not_checked() {
+    let pr2 = model("pr2.urdf");
+    let srdf = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/pr2.srdf"))
+        .unwrap()
+        .replace(
+            "</robot>",
+            "<disable_collisions link1=\"r_gripper_palm_link\" link2=\"l_gripper_palm_link\" reason=\"test\"/></robot>",
+        );
+    let with = (*pr2).clone().with_srdf_str(&srdf, "pr2.srdf").unwrap();
+    let s = SelfCollisionModel::new(Arc::new(with), &SelfCollisionOptions::default());
+    assert!(
+        !s.is_checked("r_gripper_palm_link", "l_gripper_palm_link")
+            .unwrap()
+    );
+    let pair = s
+        .allowed_pairs()
+        .iter()
+        .find(|p| p.link_a == "r_gripper_palm_link" && p.link_b == "l_gripper_palm_link")
+        .expect("the palms allowed");
+    assert_eq!(pair.reason, AllowedReason::Srdf);
+}

@@ -14,7 +14,8 @@
 //!   gripper's joint (none for a person's hand).
 //! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
 //!   (`standing` for a person who may stand up, the effort level that allows it).
-//! * `<disable_collisions link1=".." link2=".." reason=".."/>`: link pairs that may touch.
+//! * `<disable_collisions link1=".." link2=".." reason=".."/>`: link pairs that may touch
+//!   (left out of self-collision checks, besides the pairs the model's own analysis leaves out).
 //!
 //! Every name is checked against the URDF model; errors say `file:line:col`.
 

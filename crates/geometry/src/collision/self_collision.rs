@@ -42,6 +42,8 @@ pub enum AllowedReason {
     Default,
     /// They collide in (almost) every sampled configuration.
     Always,
+    /// The model's SRDF says so (`<disable_collisions>`).
+    Srdf,
     /// Their relative pose depends on at most one joint (the two fingers of a gripper, for
     /// example), and a sweep of that joint's whole range at [`SWEEP_STEPS`] + 1 values found no
     /// contact, so they never collide.
@@ -153,6 +155,11 @@ impl SelfCollisionModel {
             }
             // Shapes of one link never collide with each other.
             status[key(i, i)] = Some(AllowedReason::Adjacent);
+        }
+        for (a, b) in &model.semantics().disabled_collisions {
+            if let (Ok(a), Ok(b)) = (model.link_id(a), model.link_id(b)) {
+                status[key(a, b)].get_or_insert(AllowedReason::Srdf);
+            }
         }
         let mut candidate_links = Vec::new();
         for a in 0..nl {
