@@ -107,35 +107,23 @@ pub(crate) fn section<'s>(
     }
 }
 
-/// Parses a domain. See [`super`] for the accepted language.
-pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domain, ParseError> {
-    let top = Tree(read(text, &source)?);
-    let (items, name, _) = define(&top.0, "domain", &source)?;
-    let file = &source;
+/// The sections of a domain by kind, file order kept within a kind.
+struct Sections<'s> {
+    /// The sections that may appear once, by keyword, with where each is.
+    once: HashMap<&'s str, (Span, &'s [Sexp])>,
+    task_decls: Vec<&'s Sexp>,
+    methods: Vec<&'s Sexp>,
+    actions: Vec<&'s Sexp>,
+}
 
-    let mut domain = Domain {
-        name,
-        source: source.clone(),
-        requirements: Vec::new(),
-        types: Vec::new(),
-        constants: Vec::new(),
-        predicates: Vec::new(),
-        shared_predicates: Vec::new(),
-        functions: Vec::new(),
-        tasks: Vec::new(),
-        geometric_tasks: Vec::new(),
-        methods: Vec::new(),
-        actions: Vec::new(),
-        spelling: Spellings::default(),
-        warnings: Vec::new(),
-    };
-
-    // Sort the sections by kind, keeping file order within a kind.
+/// Sorts the domain's `items` (after `(define (domain ..)`) into [`Sections`]; a repeated
+/// once-only section or an unknown keyword is an error.
+fn sections<'s>(items: &'s [Sexp], file: &SourceName) -> Result<Sections<'s>> {
     let mut once: HashMap<&str, (Span, &[Sexp])> = HashMap::new();
     let mut task_decls: Vec<&Sexp> = Vec::new();
     let mut methods: Vec<&Sexp> = Vec::new();
     let mut actions: Vec<&Sexp> = Vec::new();
-    for item in items.get(2..).unwrap_or_default() {
+    for item in items {
         let (key, rest) = section(item, file, "domain")?;
         match key {
             ":task" => task_decls.push(item),
@@ -167,6 +155,63 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
             }
         }
     }
+    Ok(Sections {
+        once,
+        task_decls,
+        methods,
+        actions,
+    })
+}
+
+/// The error for a second declaration of `name` as a `what`, the first at `first`.
+fn already_declared(
+    file: &SourceName,
+    span: Span,
+    what: &str,
+    name: &str,
+    first: Span,
+) -> ParseError {
+    ParseError::new(
+        file,
+        span,
+        format!(
+            "{what} `{}` is already declared at {}:{}",
+            shorten(name),
+            first.line,
+            first.col
+        ),
+    )
+}
+
+/// Parses a domain. See [`super`] for the accepted language.
+pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domain, ParseError> {
+    let top = Tree(read(text, &source)?);
+    let (items, name, _) = define(&top.0, "domain", &source)?;
+    let file = &source;
+
+    let mut domain = Domain {
+        name,
+        source: source.clone(),
+        requirements: Vec::new(),
+        types: Vec::new(),
+        constants: Vec::new(),
+        predicates: Vec::new(),
+        shared_predicates: Vec::new(),
+        functions: Vec::new(),
+        tasks: Vec::new(),
+        geometric_tasks: Vec::new(),
+        methods: Vec::new(),
+        actions: Vec::new(),
+        spelling: Spellings::default(),
+        warnings: Vec::new(),
+    };
+
+    let Sections {
+        once,
+        task_decls,
+        methods,
+        actions,
+    } = sections(items.get(2..).unwrap_or_default(), file)?;
     let part = |key: &str| once.get(key).map(|(_, rest)| *rest);
 
     // Requirements must be known ones; they are recorded, not enforced (files often under- or
@@ -235,16 +280,7 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     let mut fseen: HashMap<String, Span> = HashMap::new();
     for f in &domain.functions {
         if let Some(s) = fseen.insert(f.name.clone(), f.span) {
-            return Err(ParseError::new(
-                file,
-                f.span,
-                format!(
-                    "function `{}` is already declared at {}:{}",
-                    shorten(&f.name),
-                    s.line,
-                    s.col
-                ),
-            ));
+            return Err(already_declared(file, f.span, "function", &f.name, s));
         }
     }
     // Geometric tasks live in their own namespace: only `evaluable` names them.
@@ -252,15 +288,12 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     for g in part(":geometric-tasks").unwrap_or_default() {
         let sig = ctx.signature(g, "geometric task")?;
         if let Some(s) = gseen.insert(sig.name.clone(), sig.span) {
-            return Err(ParseError::new(
+            return Err(already_declared(
                 file,
                 sig.span,
-                format!(
-                    "geometric task `{}` is already declared at {}:{}",
-                    shorten(&sig.name),
-                    s.line,
-                    s.col
-                ),
+                "geometric task",
+                &sig.name,
+                s,
             ));
         }
         domain.geometric_tasks.push(sig);
@@ -284,15 +317,12 @@ pub fn parse_domain(text: &str, source: SourceName) -> std::result::Result<Domai
     for m in &methods {
         let method = method(&ctx, m)?;
         if let Some(s) = mseen.insert(method.name.clone(), method.span) {
-            return Err(ParseError::new(
+            return Err(already_declared(
                 file,
                 method.span,
-                format!(
-                    "method `{}` is already declared at {}:{}",
-                    shorten(&method.name),
-                    s.line,
-                    s.col
-                ),
+                "method",
+                &method.name,
+                s,
             ));
         }
         domain.methods.push(method);

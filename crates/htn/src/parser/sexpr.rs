@@ -145,6 +145,42 @@ impl Drop for Tree {
     }
 }
 
+/// Why character `c` (a byte-order mark, a quote or a control character) cannot be read.
+fn forbidden(c: char) -> String {
+    match c {
+        '\u{feff}' => "a UTF-8 byte-order mark (U+FEFF); HDDL files must not start with one \
+                       (save the file as UTF-8 without BOM)"
+            .to_string(),
+        '"' => "quoted strings are not HDDL (expected a name, a `?variable` or a `:keyword`)"
+            .to_string(),
+        c => format!(
+            "control character U+{:04X} is not allowed in HDDL \
+             (expected text: names, `(`, `)`, spaces, tabs, newlines)",
+            c as u32
+        ),
+    }
+}
+
+/// Consumes the rest of the atom that starts with `c` at byte `start`; returns the byte
+/// where it ends and its width in characters.
+fn atom_end(
+    start: usize,
+    c: char,
+    chars: &mut std::iter::Peekable<std::str::CharIndices<'_>>,
+) -> (usize, u32) {
+    let mut end = start + c.len_utf8();
+    let mut width: u32 = 1;
+    while let Some(&(i, c)) = chars.peek() {
+        if is_delimiter(c) || c == '"' || c == '\u{feff}' || c.is_control() {
+            break;
+        }
+        end = i + c.len_utf8();
+        width = width.saturating_add(1);
+        chars.next();
+    }
+    (end, width)
+}
+
 /// Reads all top-level s-expressions of `text`.
 pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseError> {
     let mut top: Vec<Sexp> = Vec::new();
@@ -234,44 +270,13 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
                 }
                 col = col.saturating_add(1);
             }
-            '\u{feff}' => {
-                return Err(ParseError::new(
-                    file,
-                    span,
-                    "a UTF-8 byte-order mark (U+FEFF); HDDL files must not start with one \
-                     (save the file as UTF-8 without BOM)",
-                ));
-            }
+            '\u{feff}' | '"' => return Err(ParseError::new(file, span, forbidden(c))),
             c if c.is_control() && c != '\t' && c != '\r' => {
-                return Err(ParseError::new(
-                    file,
-                    span,
-                    format!(
-                        "control character U+{:04X} is not allowed in HDDL \
-                         (expected text: names, `(`, `)`, spaces, tabs, newlines)",
-                        c as u32
-                    ),
-                ));
-            }
-            '"' => {
-                return Err(ParseError::new(
-                    file,
-                    span,
-                    "quoted strings are not HDDL (expected a name, a `?variable` or a `:keyword`)",
-                ));
+                return Err(ParseError::new(file, span, forbidden(c)));
             }
             c if c.is_whitespace() => col = col.saturating_add(1),
             _ => {
-                let mut end = start + c.len_utf8();
-                let mut width: u32 = 1;
-                while let Some(&(i, c)) = chars.peek() {
-                    if is_delimiter(c) || c == '"' || c == '\u{feff}' || c.is_control() {
-                        break;
-                    }
-                    end = i + c.len_utf8();
-                    width = width.saturating_add(1);
-                    chars.next();
-                }
+                let (end, width) = atom_end(start, c, &mut chars);
                 let raw = text.get(start..end).unwrap_or_default();
                 let atom = Sexp::Atom {
                     text: raw.to_ascii_lowercase(),
@@ -301,58 +306,71 @@ pub(crate) fn read(text: &str, file: &SourceName) -> Result<Vec<Sexp>, ParseErro
         }
     }
 
-    if let Some(innermost) = stack.last() {
-        let open = stack.len();
-        // Evidence counts only when it comes after the innermost list left open: a list opened
-        // later and still open (a file cut short) is the better answer.
-        let after = |e: &Unclosed| {
-            let inner = match e {
-                Unclosed::Section { inner, .. } | Unclosed::Indent { inner, .. } => *inner,
-            };
-            (inner.line, inner.col) > (innermost.span.line, innermost.span.col)
-        };
-        let evidence = section_evidence
-            .filter(after)
-            .or(indent_evidence.filter(after));
-        let last_child = innermost.items.iter().rev().find_map(|i| match i {
-            Sexp::List { span, .. } => Some(*span),
-            Sexp::Atom { .. } => None,
-        });
-        let (at, message) = match evidence {
-            Some(Unclosed::Section { outer, inner, head }) => (
-                outer,
-                format!(
-                    "this `(` is never closed: the section `({head}` at {}:{} lies inside it \
-                     (end of file reached with {open} `(` open)",
-                    inner.line, inner.col
-                ),
-            ),
-            Some(Unclosed::Indent { outer, inner }) => (
-                outer,
-                format!(
-                    "this `(` is probably never closed: the `(` at {}:{}, indented like it, \
-                     lies inside it (end of file reached with {open} `(` open)",
-                    inner.line, inner.col
-                ),
-            ),
-            None => match last_child {
-                Some(last) if open == 1 => (
-                    innermost.span,
-                    format!(
-                        "this `(` is never closed (end of file reached), or the list at {}:{}, \
-                         the last in it, lacks its `)`",
-                        last.line, last.col
-                    ),
-                ),
-                _ => (
-                    innermost.span,
-                    "this `(` is never closed (end of file reached)".to_string(),
-                ),
-            },
-        };
-        return Err(ParseError::new(file, at, message));
+    if let Some(err) = unclosed(&stack, section_evidence, indent_evidence, file) {
+        return Err(err);
     }
     Ok(top)
+}
+
+/// The error for lists left open at the end of the file (`stack`, outermost first), `None`
+/// when none is: it points at the `(` most likely left unclosed, by the evidence gathered
+/// while reading (a section inside another, or a `(` indented like an outer one).
+fn unclosed(
+    stack: &[Open],
+    section_evidence: Option<Unclosed>,
+    indent_evidence: Option<Unclosed>,
+    file: &SourceName,
+) -> Option<ParseError> {
+    let innermost = stack.last()?;
+    let open = stack.len();
+    // Evidence counts only when it comes after the innermost list left open: a list opened
+    // later and still open (a file cut short) is the better answer.
+    let after = |e: &Unclosed| {
+        let inner = match e {
+            Unclosed::Section { inner, .. } | Unclosed::Indent { inner, .. } => *inner,
+        };
+        (inner.line, inner.col) > (innermost.span.line, innermost.span.col)
+    };
+    let evidence = section_evidence
+        .filter(after)
+        .or(indent_evidence.filter(after));
+    let last_child = innermost.items.iter().rev().find_map(|i| match i {
+        Sexp::List { span, .. } => Some(*span),
+        Sexp::Atom { .. } => None,
+    });
+    let (at, message) = match evidence {
+        Some(Unclosed::Section { outer, inner, head }) => (
+            outer,
+            format!(
+                "this `(` is never closed: the section `({head}` at {}:{} lies inside it \
+                 (end of file reached with {open} `(` open)",
+                inner.line, inner.col
+            ),
+        ),
+        Some(Unclosed::Indent { outer, inner }) => (
+            outer,
+            format!(
+                "this `(` is probably never closed: the `(` at {}:{}, indented like it, \
+                 lies inside it (end of file reached with {open} `(` open)",
+                inner.line, inner.col
+            ),
+        ),
+        None => match last_child {
+            Some(last) if open == 1 => (
+                innermost.span,
+                format!(
+                    "this `(` is never closed (end of file reached), or the list at {}:{}, \
+                     the last in it, lacks its `)`",
+                    last.line, last.col
+                ),
+            ),
+            _ => (
+                innermost.span,
+                "this `(` is never closed (end of file reached)".to_string(),
+            ),
+        },
+    };
+    Some(ParseError::new(file, at, message))
 }
 
 #[cfg(test)]

@@ -1,0 +1,86 @@
+//! The driver over the engines: depth-first iterations with a doubling depth bound (and one
+//! more without the left-recursion check before calling a problem unsolvable), and the
+//! fallback to the best-first engine after the depth-first one's share of the time limit.
+
+use super::super::compile::Compiled;
+use super::super::{Limit, Outcome, PlanError, PlannerOptions, SearchResult, current_rss_kb};
+use super::{Search, Stop};
+
+impl<'a, 'o> Search<'a, 'o> {
+    /// Runs the search to a plan, a proof that there is none, or a limit.
+    pub fn run(mut self) -> Result<SearchResult, PlanError> {
+        let deadline = self
+            .opts
+            .limits
+            .time
+            .and_then(|t| self.start.checked_add(t));
+        if let Some(o) = self.oracle.as_deref_mut() {
+            o.set_deadline(deadline);
+        }
+        let outcome = loop {
+            self.stats.iterations += 1;
+            self.stats.depth_bound = self.bound;
+            self.cutoff = false;
+            let loops_before = self.stats.loops_pruned;
+            match self.dfs()? {
+                Stop::Found => {
+                    break Outcome::Found {
+                        plan: self.build_plan(),
+                    };
+                }
+                Stop::Limit(l) => break Outcome::LimitReached { limit: l },
+                Stop::Switch => {
+                    self.switch_at = None;
+                    break match self.best_first() {
+                        Stop::Found => Outcome::Found {
+                            plan: self.build_plan(),
+                        },
+                        Stop::Limit(l) => Outcome::LimitReached { limit: l },
+                        // Every node reachable was generated (only sound pruning).
+                        Stop::Exhausted | Stop::Switch => Outcome::Unsolvable,
+                    };
+                }
+                Stop::Exhausted => {
+                    if self.loop_check && self.stats.loops_pruned > loops_before {
+                        // The left-recursion check may have cut off the only plans: search
+                        // again without it before calling the problem unsolvable.
+                        self.loop_check = false;
+                        self.reset();
+                        continue;
+                    }
+                    if !self.cutoff {
+                        break if self.geo_capped {
+                            Outcome::LimitReached {
+                                limit: Limit::GeometricAlternatives,
+                            }
+                        } else {
+                            Outcome::Unsolvable
+                        };
+                    }
+                    self.reset();
+                    self.bound = self.bound.saturating_mul(2);
+                }
+            }
+        };
+        self.stats.time_s = self.start.elapsed().as_secs_f64();
+        self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
+        Ok(SearchResult {
+            outcome,
+            stats: self.stats,
+        })
+    }
+}
+
+/// When the depth-first search hands over to the best-first one: after its share of the time
+/// limit, on purely symbolic problems, when the fallback is on.
+pub(super) fn fallback_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::time::Duration> {
+    let t = opts.limits.time?;
+    if opts.best_first_share <= 0.0
+        || opts.best_first_share > 1.0
+        || opts.best_first_share.is_nan()
+        || c.actions.iter().any(|a| a.evaluable.is_some())
+    {
+        return None;
+    }
+    Some(t.mul_f64(1.0 - opts.best_first_share))
+}
