@@ -18,20 +18,19 @@
 //! println!("{:?}", stream.stats());
 //! ```
 
-use std::fmt;
 use std::sync::{Arc, Mutex, Weak};
 use std::time::{Duration, Instant};
 
 use geometry::scene::{AgentId, AgentKind, ObjectId};
 use geometry::world::{World, WorldModel};
 use parry3d::math::Vector;
-use serde::{Deserialize, Serialize};
 
 use crate::grasp::{GraspCache, GraspParams};
 use crate::placement::PlacementParams;
 use crate::robot::RobotSetup;
 use crate::rrt::RrtParams;
 use crate::search::Search;
+pub use crate::search::{Failure, Stage};
 use crate::solution::SolutionSummary;
 use crate::stats::Stats;
 use crate::task::{Constraints, TaskKind};
@@ -186,25 +185,6 @@ impl Task {
             }
         }
         Ok(task)
-    }
-}
-
-/// Why a task call produced no (further) solution: which constraint stopped it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Failure {
-    /// The constraint (or stage) that rejected the last candidates: `candidate-points`, `pick`,
-    /// `object-collision`, `gripper-collision`, `inverse-kinematics`, `reachability`,
-    /// `visibility`, `trajectory`, `grasp`, or `time-limit`.
-    pub constraint: String,
-    /// In words, with the best value reached where it helps ("best visibility 0.31").
-    pub message: String,
-    /// Whether a limit (time) stopped the search rather than exhaustion.
-    pub limit: bool,
-}
-
-impl fmt::Display for Failure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} ({})", self.message, self.constraint)
     }
 }
 

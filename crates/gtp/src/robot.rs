@@ -544,7 +544,7 @@ impl<'a> ArmMotion<'a> {
         for s in 1..=steps {
             let t = s as f32 / steps as f32;
             let target = Pose::from_parts(start.translation + offset * t, start.rotation);
-            let prev = waypoints.last().unwrap().clone();
+            let prev = waypoints.last().cloned().unwrap_or_else(|| from.to_vec());
             let q = self
                 .ik(target, &prev, 1, rng)
                 .ok_or_else(|| "inverse kinematics fails along the way".to_string())?;

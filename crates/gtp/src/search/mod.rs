@@ -1,0 +1,290 @@
+//! The task search, as in the paper: effort levels, then candidate points, then grasps, then
+//! orientations; the cheap constraints first and pixel visibility last; failures remembered
+//! across effort levels; the chosen tuple confirmed by collision-free trajectories.
+//!
+//! The search is a resumable cursor (`Cursor { level, point, grasp, orientation }`): each call
+//! of `Search::next_solution` continues where the previous solution was found, so successive
+//! solutions differ in at least one of point, grasp or orientation.
+//!
+//! One file per stage a candidate passes, in the order of the constraint hierarchy:
+//!
+//! | file | stage |
+//! |---|---|
+//! | `cursor.rs` | the cursor over (level, point, grasp, orientation) and the loop that moves it |
+//! | `points.rs` | candidate points of an effort level: raw grid, reach and view filters, order |
+//! | `perception.rs` | what the human reaches and may see at an effort level (the points' tests) |
+//! | `grasps.rs` | the grasp choices (arm x grasp, or the grasp held) and their cheap tests |
+//! | `pick.rs` | picking a grasp up: gripper boxes, inverse kinematics, approach, lift |
+//! | `placements.rs` | the object's orientations at a point and the world after a placement |
+//! | `verdicts.rs` | the human-related constraints of a placement: reach, pixel visibility |
+//! | `tuple.rs` | a whole tuple confirmed: placement IK, straight moves, planned motions |
+//! | `motions.rs` | the arm motions of one grasp choice, built once; recorded trajectories |
+//! | `take.rs` | `take(o, h)`: the robot lets go, the person takes the object |
+//! | `navigate.rs` | `navigate-to`: base poses and the base's path |
+//! | `failure.rs` | typed stages, the typed [`Failure`], the rejections that explain it |
+
+mod cursor;
+mod failure;
+mod grasps;
+mod motions;
+mod navigate;
+mod perception;
+mod pick;
+mod placements;
+mod points;
+mod take;
+mod tuple;
+mod verdicts;
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use geometry::collision::StaticObstacles;
+use geometry::scene::{AgentId, ObjectId};
+use geometry::world::World;
+use parry3d::math::Vector;
+
+use crate::placement::{self, RestingFace};
+use crate::planner::{PlannerConfig, Solution, Task};
+use crate::robot::{self, RobotSetup};
+use crate::stats::Stats;
+use crate::task::{Constraints, TaskKind};
+
+use cursor::{Cursor, PlacementKey};
+use failure::Rejections;
+pub use failure::{Failure, Stage};
+use grasps::Choice;
+use motions::GraspMotions;
+use pick::PickPlan;
+use verdicts::Verdict;
+pub use verdicts::measure_visibility;
+
+/// Straight moves (approach, descent, retreat, lift) are checked in this many steps.
+const STRAIGHT_STEPS: usize = 3;
+
+/// The obstacle sets of a search, built once from the world at the start.
+///
+/// The whole scene serves the base's motions and the lines of sight; the arms' workspace only
+/// (a sphere around the robot) the arms' motions and the objects they move, since far
+/// obstacles cost checks for nothing. Each comes with the task's object and without it (when
+/// the gripper holds or straddles the object, the object is no obstacle).
+struct Obstacles {
+    /// Every obstacle of the scene, the task's object included.
+    scene: Arc<StaticObstacles>,
+    /// Every obstacle of the scene but the task's object.
+    scene_but_object: Arc<StaticObstacles>,
+    /// The obstacles within the arms' workspace, the task's object included.
+    workspace: Arc<StaticObstacles>,
+    /// The obstacles within the arms' workspace but the task's object.
+    workspace_but_object: Arc<StaticObstacles>,
+    /// The arms' workspace sphere `(centre, radius)`.
+    sphere: (Vector, f32),
+}
+
+impl Obstacles {
+    /// The obstacle sets of `world` for `setup`'s robot; `object`, the task's, is left out of
+    /// the `_but_object` sets and sizes the workspace's margin.
+    fn new(world: &World, setup: &RobotSetup, object: Option<ObjectId>) -> Obstacles {
+        let robot = setup.agent;
+        let skip: Vec<ObjectId> = object.into_iter().collect();
+        let scene = robot::obstacles(world, robot, &[]);
+        let scene_but_object = robot::obstacles(world, robot, &skip);
+        let st = world.agent_state(robot);
+        let margin = object
+            .map(|o| world.object(o).local_aabb.half_extents().length() * 2.0)
+            .unwrap_or(0.0);
+        let (centre, radius) = setup.workspace(st.base, &st.q, margin);
+        Obstacles {
+            workspace: Arc::new(robot::near(&scene, centre, radius)),
+            workspace_but_object: Arc::new(robot::near(&scene_but_object, centre, radius)),
+            scene: Arc::new(scene),
+            scene_but_object: Arc::new(scene_but_object),
+            sphere: (centre, radius),
+        }
+    }
+
+    /// The obstacles within the workspace sphere in `world` (the world after a task: a placed
+    /// object is an obstacle where it is now).
+    fn workspace_in(&self, world: &World, robot: AgentId) -> Arc<StaticObstacles> {
+        Arc::new(robot::near(
+            &robot::obstacles(world, robot, &[]),
+            self.sphere.0,
+            self.sphere.1,
+        ))
+    }
+}
+
+/// The search of one task call: what it was given, the cursor, what it remembers across
+/// tuples (failed grasps, picks, placement verdicts) and its statistics.
+pub(crate) struct Search {
+    cfg: PlannerConfig,
+    setup: Arc<RobotSetup>,
+    world: World,
+    task: Task,
+    c: Constraints,
+    rng: fastrand::Rng,
+    pub(crate) stats: Stats,
+    started: Option<Instant>,
+    elapsed: Duration,
+    object: Option<ObjectId>,
+    human: Option<AgentId>,
+    /// Joint values of the robot at the start.
+    q0_full: Vec<f32>,
+    obstacles: Obstacles,
+    /// World position of each arm's first movable joint.
+    arm_shoulders: Vec<Vector>,
+    /// Obstacles the object touches where it rests (left unchecked at the start of the lift).
+    resting_on: Vec<String>,
+    faces: Vec<RestingFace>,
+    choices: Vec<Choice>,
+    /// Whether the robot holds the object already (the only choice is its grasp).
+    held: bool,
+    /// The effort levels to search, in order.
+    levels: Vec<u8>,
+    cursor: Cursor,
+    /// Candidate points tried at a lower level (by [`points::key`]).
+    tried_points: HashSet<(i32, i32, i32)>,
+    /// Grasp choices that failed for good (no pick, no approach, a carry that cannot start).
+    failed_choices: HashSet<usize>,
+    /// Per grasp choice: its pick, `None` when it cannot be picked up.
+    pick_cache: HashMap<usize, Option<PickPlan>>,
+    /// Per grasp choice: its motions' shared parts (built on first use).
+    motions: HashMap<usize, Arc<GraspMotions>>,
+    /// Per placement of a placing task: its human-related verdict so far.
+    verdicts: HashMap<PlacementKey, Verdict>,
+    /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
+    human_shoulders: HashMap<u8, Vec<Vector>>,
+    /// The robot's arms left out of the choices because their grippers hold something else.
+    busy_arms: Vec<String>,
+    rejections: Rejections,
+    pub(crate) failure: Option<Failure>,
+    done: bool,
+    /// The person's arms, for a take's reach and withdraw.
+    pub(crate) person: Option<Arc<RobotSetup>>,
+}
+
+impl Search {
+    pub(crate) fn new(
+        cfg: PlannerConfig,
+        setup: Arc<RobotSetup>,
+        world: World,
+        task: Task,
+        c: Constraints,
+        seed: u64,
+    ) -> Result<Search, String> {
+        let robot = setup.agent;
+        let object = task.object;
+        let obstacles = Obstacles::new(&world, &setup, object);
+        let st = world.agent_state(robot);
+        let arm_shoulders: Vec<Vector> = setup
+            .arms
+            .iter()
+            .map(|a| robot::shoulder(&setup, a, st.base, &st.q))
+            .collect();
+        let q0_full = st.q.clone();
+        let mut grasps = grasps::GraspChoices::default();
+        let mut faces = Vec::new();
+        if let Some(o) = object {
+            grasps = grasps::GraspChoices::new(&cfg, &setup, &world, &task, o, &obstacles)?;
+            if task.kind != TaskKind::NavigateTo {
+                faces = placement::resting_faces(&*world.object(o).shape, &cfg.placement)
+                    .map_err(|e| e.to_string())?;
+            }
+        }
+        let levels: Vec<u8> = match task.kind {
+            TaskKind::Pick | TaskKind::PlaceOn | TaskKind::NavigateTo => vec![0],
+            _ => (0..=c.max_effort).collect(),
+        };
+        Ok(Search {
+            cfg,
+            setup,
+            human: task.human,
+            world,
+            task,
+            c,
+            rng: fastrand::Rng::with_seed(seed),
+            stats: Stats::default(),
+            started: None,
+            elapsed: Duration::default(),
+            object,
+            q0_full,
+            obstacles,
+            arm_shoulders,
+            resting_on: grasps.resting_on,
+            faces,
+            choices: grasps.choices,
+            held: grasps.held,
+            levels,
+            cursor: Cursor::default(),
+            tried_points: HashSet::new(),
+            failed_choices: HashSet::new(),
+            pick_cache: HashMap::new(),
+            motions: HashMap::new(),
+            verdicts: HashMap::new(),
+            human_shoulders: HashMap::new(),
+            busy_arms: grasps.busy_arms,
+            rejections: Rejections::default(),
+            failure: None,
+            done: false,
+            person: None,
+        })
+    }
+
+    /// The next solution, or `None` when the search is exhausted or hit its time limit
+    /// ([`Search::failure`] then says why).
+    pub(crate) fn next_solution(&mut self) -> Option<Solution> {
+        if self.done {
+            return None;
+        }
+        let began = Instant::now();
+        self.started.get_or_insert(began);
+        let out = match self.task.kind {
+            TaskKind::NavigateTo => self.next_navigation(),
+            TaskKind::Take => self.next_take(),
+            _ => self.next_tuple(),
+        };
+        self.elapsed += began.elapsed();
+        self.stats.time_s = self.elapsed.as_secs_f64();
+        self.stats.success = out.is_some();
+        if out.is_some() {
+            self.stats.solutions += 1;
+        }
+        match out {
+            Some(mut s) => {
+                s.summary.stats = self.stats;
+                s.summary.index = self.stats.solutions - 1;
+                Some(s)
+            }
+            None => {
+                self.done = true;
+                if self.failure.is_none() {
+                    self.failure = Some(self.explain());
+                }
+                None
+            }
+        }
+    }
+
+    fn out_of_time(&self, began: Instant) -> bool {
+        self.elapsed + began.elapsed() > self.c.time_limit
+    }
+
+    /// Ends the search with `failure`: `None`, for `?` and `return`.
+    fn fail<T>(&mut self, failure: Failure) -> Option<T> {
+        self.failure = Some(failure);
+        None
+    }
+
+    fn object_name(&self) -> String {
+        self.object
+            .map(|o| self.world.object(o).name.clone())
+            .unwrap_or_default()
+    }
+
+    fn human_name(&self) -> String {
+        self.human
+            .map(|h| self.world.agent(h).name().to_string())
+            .unwrap_or_default()
+    }
+}

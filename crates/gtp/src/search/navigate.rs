@@ -1,0 +1,316 @@
+//! `navigate-to`: base poses around the target, facing it (the robot's station first, then
+//! nearest the current base), each tested for collision and for the arm's reach of the target,
+//! then a base path planned (RRT-Connect over x, y, yaw). A flood fill of the floor where the
+//! robot stands spares path searches that cannot succeed.
+
+use std::collections::HashSet;
+use std::time::Instant;
+
+use geometry::collision::CollisionChecker;
+use geometry::effort;
+use parry3d::bounding_volume::Aabb;
+use parry3d::math::{Pose, Rotation, Vector};
+
+use crate::planner::Solution;
+use crate::robot;
+use crate::rrt::{JointPath, JointSpace, RrtParams};
+use crate::solution::{Phase, SolutionSummary, Trajectory};
+use crate::target::ReachTarget;
+
+use super::{Failure, Search, Stage};
+
+/// The base's start and the space its path is planned in.
+struct BaseStart {
+    /// The robot's joint values (they do not change while the base moves).
+    q: Vec<f32>,
+    pose: Pose,
+    /// Start `(x, y, yaw)`.
+    xy_yaw: [f32; 3],
+    /// The scene's bounds.
+    bounds: Aabb,
+    /// x, y within the bounds (and the start), yaw free.
+    space: JointSpace,
+}
+
+impl Search {
+    /// The next base pose the robot can drive to, facing the target, within the arm's reach.
+    pub(super) fn next_navigation(&mut self) -> Option<Solution> {
+        let began = Instant::now();
+        let robot = self.setup.agent;
+        let target = match self.task.target_object {
+            Some(o) => ReachTarget::object(&self.world, o),
+            None => ReachTarget::Point(self.task.target_point?),
+        };
+        if self.cursor.points.is_none() {
+            self.cursor.points = Some(self.base_candidates(&target));
+            self.cursor.point = 0;
+        }
+        let mut checker = match self.base_checker() {
+            Ok(c) => c,
+            Err(f) => return self.fail(f),
+        };
+        let start = self.base_start();
+        // Boxed in (an arm reaching over furniture, say): no base path starts anywhere, so
+        // say so now rather than after a failed path search to every candidate pose.
+        if self.cursor.point == 0
+            && let Some(f) = boxed_in(&checker, &start)
+        {
+            return self.fail(f);
+        }
+        let reach = self.world.agent(robot).reach;
+        let mut region: Option<FreeRegion> = None;
+        let mut rrt_failed = false;
+        loop {
+            if self.out_of_time(began) {
+                return self.fail(Failure {
+                    stage: Stage::TimeLimit,
+                    message: format!("time limit of {:?} reached", self.c.time_limit),
+                    limit: true,
+                });
+            }
+            let c = self.cursor.current_point()?;
+            self.cursor.point += 1;
+            self.stats.points += 1;
+            let aim = target.nearest(c);
+            let yaw = (aim.y - c.y).atan2(aim.x - c.x);
+            let base = geometry::world::base_pose(c.x, c.y, yaw);
+            checker.set_base(base);
+            if !checker.is_config_free(&start.q) {
+                self.reject(Stage::ObjectCollision, || {
+                    "every base pose near the target collides".into()
+                });
+                continue;
+            }
+            let sh = effort::shoulders(&self.world, robot, base, &start.q);
+            if !target.within_reach(&sh, reach) {
+                self.reject(Stage::Reach, || {
+                    "the target is out of the arm's reach from every free base pose".into()
+                });
+                continue;
+            }
+            // Once a path search failed: is the pose in the free region where the robot
+            // stands at all? (Cheaper than a path search that cannot succeed.)
+            if rrt_failed && region.is_none() {
+                region = Some(free_region(&checker, &start));
+            }
+            if region.as_ref().is_some_and(|r| !r.contains(c.x, c.y)) {
+                self.reject(Stage::Trajectory, || {
+                    "no collision-free base path: the base poses near the target are not \
+                     connected to where the robot stands"
+                        .into()
+                });
+                continue;
+            }
+            let goal = [c.x, c.y, yaw];
+            match self.base_path(&checker, &start, goal) {
+                Ok(path) => return Some(self.navigation_solution(&start, base, goal, path)),
+                Err(e) => {
+                    rrt_failed = true;
+                    self.reject(Stage::Trajectory, || {
+                        format!("no collision-free base path: {e}")
+                    });
+                }
+            }
+        }
+    }
+
+    /// Base positions around the target's footprint, facing it, nearest the current base
+    /// first; but the robot's station (its base in the scene file) before them all: going back
+    /// to a piece of furniture takes the robot back to where it works (m9's NAVTO(desk)). A
+    /// station that does not reach the target is rejected by the search.
+    fn base_candidates(&self, target: &ReachTarget) -> Vec<Vector> {
+        let robot = self.setup.agent;
+        let cur = self.world.agent_state(robot).base.translation;
+        let mut cands = target.base_positions(cur);
+        let [sx, sy, _] = self.world.agent(robot).spec.base;
+        let station = Vector::new(sx, sy, 0.0);
+        if (station - Vector::new(cur.x, cur.y, 0.0)).length() > 0.01 {
+            cands.insert(0, station);
+        }
+        cands
+    }
+
+    /// The collision checker of the whole robot, with what it carries, among every obstacle of
+    /// the scene; errs when what it carries cannot be checked.
+    fn base_checker(&self) -> Result<CollisionChecker, Failure> {
+        let robot = self.setup.agent;
+        let mut checker = CollisionChecker::new(
+            self.setup.self_model.clone(),
+            self.obstacles.scene.clone(),
+            self.world.agent_state(robot).base,
+        );
+        robot::carry_all(&mut checker, &self.world, &self.setup).map_err(|e| {
+            Failure::at(
+                Stage::ObjectCollision,
+                format!("the object the robot carries: {e}"),
+            )
+        })?;
+        Ok(checker)
+    }
+
+    /// Where the base starts and the space of its path.
+    fn base_start(&self) -> BaseStart {
+        let pose = self.world.agent_state(self.setup.agent).base;
+        let (sx, sy) = (pose.translation.x, pose.translation.y);
+        let syaw = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX).0;
+        let bounds = self
+            .world
+            .scene()
+            .bounds
+            .unwrap_or_else(|| self.world.bounds());
+        let space = JointSpace::new(&[
+            (bounds.mins.x.min(sx), bounds.maxs.x.max(sx), false),
+            (bounds.mins.y.min(sy), bounds.maxs.y.max(sy), false),
+            (0.0, 0.0, true),
+        ]);
+        BaseStart {
+            q: self.q0_full.clone(),
+            pose,
+            xy_yaw: [sx, sy, syaw],
+            bounds,
+            space,
+        }
+    }
+
+    /// The base's path from the start to `goal` `(x, y, yaw)` (RRT-Connect, 5 cm resolution).
+    fn base_path(
+        &mut self,
+        checker: &CollisionChecker,
+        start: &BaseStart,
+        goal: [f32; 3],
+    ) -> Result<JointPath, String> {
+        self.stats.planner_calls += 1;
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let valid = |b: &[f32]| {
+            let mut ck = checker.clone();
+            ck.set_base(geometry::world::base_pose(b[0], b[1], b[2]));
+            ck.is_config_free(&start.q)
+        };
+        let params = RrtParams {
+            resolution: 0.05,
+            max_step: 0.5,
+            ..self.cfg.rrt.clone()
+        };
+        crate::rrt::plan(&start.space, &start.xy_yaw, &goal, valid, &params, &mut rng)
+            .map(|(path, _)| path)
+            .map_err(|(e, _)| e.to_string())
+    }
+
+    /// The solution of a base path to `base` (`goal`: its x, y, yaw).
+    fn navigation_solution(
+        &self,
+        start: &BaseStart,
+        base: Pose,
+        goal: [f32; 3],
+        path: JointPath,
+    ) -> Solution {
+        let robot = self.setup.agent;
+        let mut after = self.world.clone();
+        after.set_agent_config(robot, base, &start.q);
+        let traj = Trajectory {
+            phase: Phase::Drive,
+            agent: self.world.agent(robot).name().to_string(),
+            arm: "base".into(),
+            joints: vec!["base_x".into(), "base_y".into(), "base_yaw".into()],
+            length: path.length(&start.space),
+            waypoints: path.unwrapped(&start.space).waypoints,
+            held: robot::carried_record(&self.world, &self.setup),
+            gripper_opening: 0.0,
+            ignored: vec![],
+            straddles: None,
+        };
+        let summary = SolutionSummary {
+            task: self.task.kind,
+            args: self.task.args.clone(),
+            index: 0,
+            effort_level: 0,
+            grasp: None,
+            placement: None,
+            visibility: None,
+            reach_effort: None,
+            robot_base: Some(goal),
+            trajectories: vec![traj],
+            stats: self.stats,
+        };
+        Solution {
+            world: after,
+            summary,
+        }
+    }
+}
+
+/// Whether every move of the base by 5 cm from the start collides: the failure to report.
+fn boxed_in(checker: &CollisionChecker, start: &BaseStart) -> Option<Failure> {
+    let step = 0.05;
+    let free = (0..16).any(|k| {
+        let a = k as f32 * std::f32::consts::TAU / 16.0;
+        let mut ck = checker.clone();
+        ck.set_base(Pose::from_parts(
+            start.pose.translation + Vector::new(a.cos(), a.sin(), 0.0) * step,
+            start.pose.rotation,
+        ));
+        ck.is_config_free(&start.q)
+    });
+    if free {
+        return None;
+    }
+    let why = checker
+        .first_collision(&start.q)
+        .map(|c| format!(" (already: {c})"))
+        .unwrap_or_default();
+    Some(Failure::at(
+        Stage::ObjectCollision,
+        format!("the robot cannot move its base: every move of {step} m collides{why}"),
+    ))
+}
+
+/// The floor cells the robot's base can reach from where it stands without turning, on a grid
+/// of [`FreeRegion::STEP`] (flood fill, each cell's configuration checked): a cheap test of
+/// whether a base pose is worth a path search.
+struct FreeRegion {
+    origin: (f32, f32),
+    cells: HashSet<(i32, i32)>,
+}
+
+impl FreeRegion {
+    const STEP: f32 = 0.05;
+
+    /// Whether the cell of `(x, y)` or one next to it is reachable.
+    fn contains(&self, x: f32, y: f32) -> bool {
+        let i = ((x - self.origin.0) / Self::STEP).round() as i32;
+        let j = ((y - self.origin.1) / Self::STEP).round() as i32;
+        [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)]
+            .iter()
+            .any(|(di, dj)| self.cells.contains(&(i + di, j + dj)))
+    }
+}
+
+/// The free region around the base's start, with the base's rotation there.
+fn free_region(checker: &CollisionChecker, start: &BaseStart) -> FreeRegion {
+    let step = FreeRegion::STEP;
+    let origin = (start.xy_yaw[0], start.xy_yaw[1]);
+    let rotation: Rotation = start.pose.rotation;
+    let bounds = &start.bounds;
+    let mut ck = checker.clone();
+    let mut free = |i: i32, j: i32| {
+        let (x, y) = (origin.0 + i as f32 * step, origin.1 + j as f32 * step);
+        if x < bounds.mins.x || x > bounds.maxs.x || y < bounds.mins.y || y > bounds.maxs.y {
+            return false;
+        }
+        ck.set_base(Pose::from_parts(Vector::new(x, y, 0.0), rotation));
+        ck.is_config_free(&start.q)
+    };
+    let mut cells = HashSet::new();
+    let mut todo = vec![(0, 0)];
+    cells.insert((0, 0));
+    while let Some((i, j)) = todo.pop() {
+        for (di, dj) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let n = (i + di, j + dj);
+            if !cells.contains(&n) && free(n.0, n.1) {
+                cells.insert(n);
+                todo.push(n);
+            }
+        }
+    }
+    FreeRegion { origin, cells }
+}

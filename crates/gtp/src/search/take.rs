@@ -1,0 +1,286 @@
+//! `take(o, h)`: the robot holds the object out and lets go; the person reaches it with their
+//! nearest free hand and withdraws it. One solution: the human must reach the object where the
+//! robot holds it; the robot opens its gripper and draws it back (straight, else planned).
+
+use std::sync::Arc;
+
+use geometry::scene::ObjectId;
+use geometry::world::World;
+use parry3d::math::{Pose, Vector};
+
+use crate::planner::Solution;
+use crate::robot::{self, RobotSetup};
+use crate::rrt::JointPath;
+use crate::solution::{HeldRecord, Phase, SolutionSummary, Trajectory};
+
+use super::motions::{GraspMotions, Grip, end, straddles};
+use super::{Failure, STRAIGHT_STEPS, Search, Stage};
+
+impl Search {
+    /// `take(o, h)`: one solution. The object goes to the human's nearest free hand, which
+    /// keeps it there, out of the way.
+    pub(super) fn next_take(&mut self) -> Option<Solution> {
+        let (o, h) = (self.object?, self.human?);
+        let oname = self.object_name();
+        let hname = self.human_name();
+        if self.stats.solutions > 0 {
+            return None;
+        }
+        if !self.held {
+            return self.fail(Failure::at(
+                Stage::Held,
+                format!("`{oname}` is not in the robot's gripper: nothing to take"),
+            ));
+        }
+        let k = self.c.reach_within.unwrap_or(self.c.max_effort);
+        let world = self.world.clone();
+        let params = geometry::facts::FactParams {
+            max_effort: k,
+            ..Default::default()
+        };
+        let Some(level) =
+            geometry::facts::reachable_effort(&world, h, o, &params).filter(|l| *l <= k)
+        else {
+            self.reject(Stage::Reach, || {
+                format!("{hname} cannot reach `{oname}` where the robot holds it (effort <= {k})")
+            });
+            return None;
+        };
+        let m = self.grasp_motions(0)?;
+        let ways = self.retreat_ways(&m, &world);
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let (retreat, clear) = match self.take_retreat(&m, &world, o, &ways, &mut rng) {
+            Ok(r) => r,
+            Err(last) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("no collision-free retreat after handing `{oname}` to {hname}: {last}")
+                });
+                return None;
+            }
+        };
+        // The world after: the gripper open where the retreat ends, the object in the hand.
+        let mut after = world.clone();
+        let robot_id = self.setup.agent;
+        let mut q = self.q0_full.clone();
+        robot::set_arm_values(m.arm(), &mut q, &end(&retreat)?);
+        robot::set_opening(&self.setup.model, m.arm(), &mut q, m.opening);
+        let base = after.agent_state(robot_id).base;
+        after.set_agent_config(robot_id, base, &q);
+        let pose = clear.then(|| world.object_pose(o));
+        let retreat = m.record(Phase::Retreat, retreat, Grip::Around(pose));
+        let (motion, person) = self.person_takes(&world, &after, o)?;
+        let hand = &person.arms[motion.arm];
+        after.set_agent_config(h, world.agent_state(h).base, &motion.q_end);
+        after.attach_with_grasp(o, h, hand.tool_link, motion.grasp);
+        let human_motion = |phase, path: JointPath, held| Trajectory {
+            phase,
+            agent: hname.clone(),
+            arm: hand.name.clone(),
+            joints: hand.joint_names.clone(),
+            length: path.length(&hand.space),
+            waypoints: path.unwrapped(&hand.space).waypoints,
+            held,
+            gripper_opening: 0.0,
+            ignored: vec![],
+            straddles: None,
+        };
+        let held = HeldRecord {
+            object: oname.clone(),
+            object_in_tool: motion.grasp.into(),
+        };
+        let trajectories = vec![
+            human_motion(Phase::Reach, motion.reach.clone(), None),
+            retreat,
+            human_motion(Phase::Withdraw, motion.withdraw.clone(), Some(held)),
+        ];
+        Some(self.take_solution(after, level, trajectories))
+    }
+
+    /// The ways the robot's gripper may draw back from the object it let go: straight back
+    /// along the gripper, towards the robot, up; each with whether the gripper must stay clear
+    /// of the object (back along the gripper the fingers slide off the object, which the human
+    /// holds now: they may brush it; the other ways must stay clear of it).
+    fn retreat_ways(&self, m: &GraspMotions, world: &World) -> RetreatWays {
+        let tool = m
+            .open(self.obstacles.workspace_but_object.clone())
+            .tool_pose(&m.q0);
+        let mut home = world.agent_state(self.setup.agent).base.translation - tool.translation;
+        home.z = 0.0;
+        let ways = [
+            (tool.rotation * Vector::X * -1.0, false),
+            (home.normalize_or_zero(), true),
+            (Vector::Z, true),
+        ];
+        RetreatWays {
+            tool,
+            ways: ways.into_iter().filter(|(w, _)| w.length() > 0.5).collect(),
+        }
+    }
+
+    /// The robot's retreat once it let go of `o` in `world`: the first of `ways` that is free
+    /// straight, else the arm planned to where the gripper is drawn back each of those ways;
+    /// with whether the gripper stays clear of the object. Errs with the last reason when no
+    /// way is free.
+    fn take_retreat(
+        &mut self,
+        m: &GraspMotions,
+        world: &World,
+        o: ObjectId,
+        ways: &RetreatWays,
+        rng: &mut fastrand::Rng,
+    ) -> Result<(JointPath, bool), String> {
+        let open = m.open(self.obstacles.workspace_but_object.clone());
+        let straddle = straddles(
+            &open,
+            m.opening,
+            world.object(o).shape.clone(),
+            world.object_shape_pose(o),
+        );
+        let free = |_: &[f32]| true;
+        let rrt = self.cfg.rrt.clone();
+        let mut checks = 0;
+        let mut last = String::new();
+        for &(way, clear) in &ways.ways {
+            let extra: &dyn Fn(&[f32]) -> bool = if clear { &straddle } else { &free };
+            let r = open.straight(
+                &m.q0,
+                way * self.c.approach,
+                3 * STRAIGHT_STEPS,
+                &rrt,
+                extra,
+                rng,
+                &mut checks,
+            );
+            match r {
+                Ok(p) => return Ok((p, clear)),
+                Err(e) => last = e,
+            }
+        }
+        // No straight way (an arm near its joint limits, or in a tight spot).
+        self.planned_take_retreat(m, world, o, ways, rng, last)
+            .map(|p| (p, true))
+    }
+
+    /// The arm planned to where the gripper is drawn back each of `ways`, the object an
+    /// obstacle where the human holds it; the first that succeeds. Errs with the last reason
+    /// (`last`, the straight moves', when none was tried).
+    fn planned_take_retreat(
+        &mut self,
+        m: &GraspMotions,
+        world: &World,
+        o: ObjectId,
+        ways: &RetreatWays,
+        rng: &mut fastrand::Rng,
+        mut last: String,
+    ) -> Result<JointPath, String> {
+        // The object let go: an obstacle (the robot's own held objects are none).
+        let mut released = world.clone();
+        released.detach(o);
+        let clear_all = m.open(self.obstacles.workspace_in(&released, self.setup.agent));
+        let any = |_: &[f32]| true;
+        let tool = ways.tool;
+        for &(way, _) in &ways.ways {
+            let back = Pose::from_parts(tool.translation + way * self.c.approach, tool.rotation);
+            self.stats.ik_calls += 1;
+            let ik = clear_all.ik_free(
+                back,
+                &m.q0,
+                2 * self.cfg.ik_tries,
+                self.cfg.ik_attempts,
+                &any,
+                rng,
+            );
+            match ik {
+                Ok(q_back) => {
+                    self.stats.planner_calls += 1;
+                    match clear_all.plan(&m.q0, &q_back, &self.cfg.rrt, rng) {
+                        Ok((p, _)) => return Ok(p),
+                        Err(e) => last = e.to_string(),
+                    }
+                }
+                Err(e) => {
+                    last = e.unwrap_or_else(|| "no inverse kinematics drawn back".into());
+                }
+            }
+        }
+        Err(last)
+    }
+
+    /// The person's reach and withdraw of a take, with the free hand nearest the object
+    /// (`before`: the robot holds it out; `after`: the robot drawn back). `None`, with the
+    /// reason recorded, when both hands are full or no collision-free motion exists.
+    fn person_takes(
+        &mut self,
+        before: &World,
+        after: &World,
+        o: ObjectId,
+    ) -> Option<(crate::take::TakeMotion, Arc<RobotSetup>)> {
+        let oname = self.object_name();
+        let hname = self.human_name();
+        let Some(person) = self.person.clone() else {
+            return self.fail(Failure::at(
+                Stage::Held,
+                format!("{hname} has no arms to take `{oname}` with"),
+            ));
+        };
+        let at = before.object_pose(o).translation;
+        let free_arm = (0..person.arms.len())
+            .filter(|&i| {
+                robot::in_grippers(before, &person)
+                    .all(|(_, a, _)| a.tool_link != person.arms[i].tool_link)
+            })
+            .min_by(|&i, &j| {
+                let d = |k: usize| {
+                    let p = before.agent_state(person.agent).link_poses()[person.arms[k].tool_link];
+                    (p.translation - at).length()
+                };
+                d(i).total_cmp(&d(j))
+            });
+        let Some(arm) = free_arm else {
+            return self.fail(Failure::at(
+                Stage::Held,
+                format!("both of {hname}'s hands hold something: no hand to take `{oname}` with"),
+            ));
+        };
+        let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        self.stats.planner_calls += 2;
+        match crate::take::plan_take(&person, arm, before, after, o, &self.cfg.rrt, &mut rng) {
+            Ok(m) => Some((m, person)),
+            Err(e) => {
+                self.reject(Stage::Trajectory, || {
+                    format!("{hname} cannot take `{oname}`: {e}")
+                });
+                None
+            }
+        }
+    }
+
+    /// A take's solution: the world after it, the effort at which the human reached the
+    /// object, the motions.
+    fn take_solution(&self, after: World, level: u8, trajectories: Vec<Trajectory>) -> Solution {
+        Solution {
+            world: after,
+            summary: SolutionSummary {
+                task: self.task.kind,
+                args: self.task.args.clone(),
+                index: 0,
+                effort_level: level,
+                grasp: None,
+                placement: None,
+                visibility: None,
+                // In the hand: reached at level 0 now.
+                reach_effort: Some(0),
+                robot_base: None,
+                trajectories,
+                stats: self.stats,
+            },
+        }
+    }
+}
+
+/// Where the robot's tool is when it lets go, and the ways it may draw back from there (unit
+/// directions, with whether the gripper must stay clear of the object).
+struct RetreatWays {
+    tool: Pose,
+    ways: Vec<(Vector, bool)>,
+}
