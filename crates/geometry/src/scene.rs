@@ -420,73 +420,10 @@ impl Scene {
                     format!("duplicate object name `{}`", spec.name),
                 ));
             }
-            let pose = ck.pose(&spec.pose, &format!("{at}.pose"))?;
-            let (shape, shape_offset, kind) = match (&spec.shape, &spec.parts) {
-                (Some(s), None) => ck.shape(s, &format!("{at}.shape"), base_dir)?,
-                (None, Some(parts)) if !parts.is_empty() => {
-                    let mut list = Vec::with_capacity(parts.len());
-                    for (k, p) in parts.iter().enumerate() {
-                        let pat = format!("{at}.parts[{k}]");
-                        let (s, off, _) = ck.shape(&p.shape, &format!("{pat}.shape"), base_dir)?;
-                        let ppose = ck.pose(&p.pose, &format!("{pat}.pose"))?;
-                        list.push((ppose * off, s));
-                    }
-                    let n = list.len();
-                    (
-                        SharedShape::compound(list),
-                        Pose::IDENTITY,
-                        ShapeKind::Compound { parts: n },
-                    )
-                }
-                (None, Some(_)) => {
-                    return Err(ck.err(&format!("{at}.parts"), "needs at least one part".into()));
-                }
-                (Some(_), Some(_)) => {
-                    return Err(ck.err(&at, "give either `shape` or `parts`, not both".into()));
-                }
-                (None, None) => {
-                    return Err(ck.err(
-                        &at,
-                        "missing `shape` (box, cylinder or mesh) or `parts`".into(),
-                    ));
-                }
-            };
-            let local_aabb = shape.compute_aabb(&shape_offset);
-            ck.extent(&local_aabb, &at)?;
-            let mut surfaces = Vec::new();
-            if let Some(list) = &spec.surfaces {
-                for (k, s) in list.iter().enumerate() {
-                    let sat = format!("{at}.surfaces[{k}]");
-                    ck.coords(&s.centre, &format!("{sat}.centre"))?;
-                    ck.positive(&s.half_extents, &format!("{sat}.half_extents"))?;
-                    surfaces.push(SupportSurface {
-                        centre: Vector::from(s.centre),
-                        half_extents: s.half_extents,
-                    });
-                }
-                if !spec.support && !list.is_empty() {
-                    return Err(ck.err(
-                        &format!("{at}.surfaces"),
-                        "surfaces given but `support` is not true".into(),
-                    ));
-                }
-            } else if spec.support {
-                surfaces.push(derive_top_face(&kind, &local_aabb));
-            }
-            objects.push(ObjectModel {
-                name: spec.name.clone(),
-                shape,
-                shape_offset,
-                kind,
-                colour: spec.colour.unwrap_or_else(|| palette(i)),
-                movable: spec.movable,
-                surfaces,
-                container: spec.container,
-                local_aabb,
-            });
+            let (object, pose) = object_model(&ck, spec, i, base_dir)?;
+            objects.push(object);
             initial_poses.push(pose);
         }
-
         let mut agents = Vec::with_capacity(file.agents.len());
         let mut agent_names: HashMap<&str, usize> = HashMap::new();
         for (i, a) in file.agents.iter().enumerate() {
@@ -501,101 +438,9 @@ impl Scene {
                     ),
                 ));
             }
-            let urdf = base_dir.join(&a.urdf);
-            if !urdf.is_file() {
-                return Err(ck.err(
-                    &format!("{at}.urdf"),
-                    format!("URDF file `{}` not found", urdf.display()),
-                ));
-            }
-            let srdf = match &a.srdf {
-                Some(p) => {
-                    let p = base_dir.join(p);
-                    if !p.is_file() {
-                        return Err(ck.err(
-                            &format!("{at}.srdf"),
-                            format!("SRDF file `{}` not found", p.display()),
-                        ));
-                    }
-                    Some(p)
-                }
-                None => Some(urdf.with_extension("srdf")).filter(|p| p.is_file()),
-            };
-            ck.finite(&[a.base.yaw], &format!("{at}.base.yaw"))?;
-            ck.coords(&[a.base.x, a.base.y], &format!("{at}.base"))?;
-            for (j, v) in &a.joints {
-                if !v.is_finite() {
-                    return Err(ck.err(
-                        &format!("{at}.joints.{j}"),
-                        format!("joint value {v} is not finite"),
-                    ));
-                }
-            }
-            let fov = match a.fov_deg {
-                Some(f) => {
-                    ck.finite(&f, &format!("{at}.fov_deg"))?;
-                    if !(f[0] > 1.0 && f[0] < 179.0 && f[1] > 1.0 && f[1] < 179.0) {
-                        return Err(ck.err(
-                            &format!("{at}.fov_deg"),
-                            format!("field of view {f:?} must be between 1 and 179 degrees"),
-                        ));
-                    }
-                    Some([f[0].to_radians(), f[1].to_radians()])
-                }
-                None => None,
-            };
-            if let Some(r) = a.reach {
-                ck.positive(&[r], &format!("{at}.reach"))?;
-            }
-            if a.sitting && a.kind == KindSpec::Robot {
-                return Err(ck.err(
-                    &format!("{at}.sitting"),
-                    "only humans sit (robots use `torso_lift` effort)".into(),
-                ));
-            }
-            let effort = a.effort.clone().unwrap_or_default();
-            ck.effort(&effort, &format!("{at}.effort"))?;
-            agents.push(AgentSpecResolved {
-                name: a.name.clone(),
-                kind: match a.kind {
-                    KindSpec::Robot => AgentKind::Robot,
-                    KindSpec::Human => AgentKind::Human,
-                },
-                urdf,
-                srdf,
-                base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
-                joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
-                eye: a.eye.clone(),
-                shoulders: a.shoulders.clone(),
-                hands: a.hands.clone(),
-                fov,
-                reach: a.reach,
-                sitting: a.sitting,
-                colour: a.colour.unwrap_or(match a.kind {
-                    KindSpec::Robot => [150, 160, 175],
-                    KindSpec::Human => [225, 180, 150],
-                }),
-                effort,
-            });
+            agents.push(agent_spec(&ck, a, &at, base_dir)?);
         }
-
-        let bounds = match &file.scene.bounds {
-            Some(b) => {
-                ck.coords(&b.min, "scene.bounds.min")?;
-                ck.coords(&b.max, "scene.bounds.max")?;
-                if (0..3).any(|k| b.min[k] >= b.max[k]) {
-                    return Err(ck.err(
-                        "scene.bounds",
-                        format!(
-                            "min {:?} must be below max {:?} on every axis",
-                            b.min, b.max
-                        ),
-                    ));
-                }
-                Some(Aabb::new(Vector::from(b.min), Vector::from(b.max)))
-            }
-            None => None,
-        };
+        let bounds = scene_bounds(&ck, file.scene.bounds.as_ref())?;
 
         Ok(Scene {
             name: file
@@ -651,6 +496,187 @@ fn derive_top_face(kind: &ShapeKind, aabb: &Aabb) -> SupportSurface {
         centre: Vector::new(c.x, c.y, aabb.maxs.z),
         half_extents: half,
     }
+}
+
+/// One object of the scene file, checked, and its initial pose.
+fn object_model(
+    ck: &Checker,
+    spec: &ObjectSpec,
+    i: usize,
+    base_dir: &Path,
+) -> Result<(ObjectModel, Pose), SceneError> {
+    let at = format!("objects[{i}]");
+    let pose = ck.pose(&spec.pose, &format!("{at}.pose"))?;
+    let (shape, shape_offset, kind) = match (&spec.shape, &spec.parts) {
+        (Some(s), None) => ck.shape(s, &format!("{at}.shape"), base_dir)?,
+        (None, Some(parts)) if !parts.is_empty() => {
+            let mut list = Vec::with_capacity(parts.len());
+            for (k, p) in parts.iter().enumerate() {
+                let pat = format!("{at}.parts[{k}]");
+                let (s, off, _) = ck.shape(&p.shape, &format!("{pat}.shape"), base_dir)?;
+                let ppose = ck.pose(&p.pose, &format!("{pat}.pose"))?;
+                list.push((ppose * off, s));
+            }
+            let n = list.len();
+            (
+                SharedShape::compound(list),
+                Pose::IDENTITY,
+                ShapeKind::Compound { parts: n },
+            )
+        }
+        (None, Some(_)) => {
+            return Err(ck.err(&format!("{at}.parts"), "needs at least one part".into()));
+        }
+        (Some(_), Some(_)) => {
+            return Err(ck.err(&at, "give either `shape` or `parts`, not both".into()));
+        }
+        (None, None) => {
+            return Err(ck.err(
+                &at,
+                "missing `shape` (box, cylinder or mesh) or `parts`".into(),
+            ));
+        }
+    };
+    let local_aabb = shape.compute_aabb(&shape_offset);
+    ck.extent(&local_aabb, &at)?;
+    let mut surfaces = Vec::new();
+    if let Some(list) = &spec.surfaces {
+        for (k, s) in list.iter().enumerate() {
+            let sat = format!("{at}.surfaces[{k}]");
+            ck.coords(&s.centre, &format!("{sat}.centre"))?;
+            ck.positive(&s.half_extents, &format!("{sat}.half_extents"))?;
+            surfaces.push(SupportSurface {
+                centre: Vector::from(s.centre),
+                half_extents: s.half_extents,
+            });
+        }
+        if !spec.support && !list.is_empty() {
+            return Err(ck.err(
+                &format!("{at}.surfaces"),
+                "surfaces given but `support` is not true".into(),
+            ));
+        }
+    } else if spec.support {
+        surfaces.push(derive_top_face(&kind, &local_aabb));
+    }
+    let object = ObjectModel {
+        name: spec.name.clone(),
+        shape,
+        shape_offset,
+        kind,
+        colour: spec.colour.unwrap_or_else(|| palette(i)),
+        movable: spec.movable,
+        surfaces,
+        container: spec.container,
+        local_aabb,
+    };
+    Ok((object, pose))
+}
+
+/// One agent of the scene file, checked, with its paths resolved.
+fn agent_spec(
+    ck: &Checker,
+    a: &AgentSpec,
+    at: &str,
+    base_dir: &Path,
+) -> Result<AgentSpecResolved, SceneError> {
+    let urdf = base_dir.join(&a.urdf);
+    if !urdf.is_file() {
+        return Err(ck.err(
+            &format!("{at}.urdf"),
+            format!("URDF file `{}` not found", urdf.display()),
+        ));
+    }
+    let srdf = match &a.srdf {
+        Some(p) => {
+            let p = base_dir.join(p);
+            if !p.is_file() {
+                return Err(ck.err(
+                    &format!("{at}.srdf"),
+                    format!("SRDF file `{}` not found", p.display()),
+                ));
+            }
+            Some(p)
+        }
+        None => Some(urdf.with_extension("srdf")).filter(|p| p.is_file()),
+    };
+    ck.finite(&[a.base.yaw], &format!("{at}.base.yaw"))?;
+    ck.coords(&[a.base.x, a.base.y], &format!("{at}.base"))?;
+    for (j, v) in &a.joints {
+        if !v.is_finite() {
+            return Err(ck.err(
+                &format!("{at}.joints.{j}"),
+                format!("joint value {v} is not finite"),
+            ));
+        }
+    }
+    let fov = match a.fov_deg {
+        Some(f) => {
+            ck.finite(&f, &format!("{at}.fov_deg"))?;
+            if !(f[0] > 1.0 && f[0] < 179.0 && f[1] > 1.0 && f[1] < 179.0) {
+                return Err(ck.err(
+                    &format!("{at}.fov_deg"),
+                    format!("field of view {f:?} must be between 1 and 179 degrees"),
+                ));
+            }
+            Some([f[0].to_radians(), f[1].to_radians()])
+        }
+        None => None,
+    };
+    if let Some(r) = a.reach {
+        ck.positive(&[r], &format!("{at}.reach"))?;
+    }
+    if a.sitting && a.kind == KindSpec::Robot {
+        return Err(ck.err(
+            &format!("{at}.sitting"),
+            "only humans sit (robots use `torso_lift` effort)".into(),
+        ));
+    }
+    let effort = a.effort.clone().unwrap_or_default();
+    ck.effort(&effort, &format!("{at}.effort"))?;
+    Ok(AgentSpecResolved {
+        name: a.name.clone(),
+        kind: match a.kind {
+            KindSpec::Robot => AgentKind::Robot,
+            KindSpec::Human => AgentKind::Human,
+        },
+        urdf,
+        srdf,
+        base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
+        joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
+        eye: a.eye.clone(),
+        shoulders: a.shoulders.clone(),
+        hands: a.hands.clone(),
+        fov,
+        reach: a.reach,
+        sitting: a.sitting,
+        colour: a.colour.unwrap_or(match a.kind {
+            KindSpec::Robot => [150, 160, 175],
+            KindSpec::Human => [225, 180, 150],
+        }),
+        effort,
+    })
+}
+
+/// The scene's optional bounds, checked.
+fn scene_bounds(ck: &Checker, bounds: Option<&BoundsSpec>) -> Result<Option<Aabb>, SceneError> {
+    Ok(match bounds {
+        Some(b) => {
+            ck.coords(&b.min, "scene.bounds.min")?;
+            ck.coords(&b.max, "scene.bounds.max")?;
+            if (0..3).any(|k| b.min[k] >= b.max[k]) {
+                return Err(ck.err(
+                    "scene.bounds",
+                    format!(
+                        "min {:?} must be below max {:?} on every axis",
+                        b.min, b.max
+                    ),
+                ));
+            }
+            Some(Aabb::new(Vector::from(b.min), Vector::from(b.max)))
+        }
+        None => None,
+    })
 }
 
 struct Checker {

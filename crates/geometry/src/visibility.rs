@@ -25,7 +25,7 @@ use parry3d::shape::Shape;
 use crate::effort::aim_head;
 use crate::render::look_rotation;
 use crate::scene::{AgentId, ObjectId};
-use crate::world::{BodyOwner, World};
+use crate::world::{Body, BodyOwner, World};
 
 /// Default grid: 64 x 64 rays over the target.
 pub const DEFAULT_RESOLUTION: usize = 64;
@@ -124,37 +124,7 @@ pub fn visibility_from_upto(
     let mut region = taabb;
     region.take_point(e);
     let bodies = world.bodies();
-    let mut occluders: Vec<Occluder<'_>> = Vec::new();
-    for b in &bodies {
-        if b.owner == BodyOwner::Object(target) {
-            continue;
-        }
-        let bb = b.shape.compute_aabb(&b.pose);
-        if !bb.intersects(&region) || b.shape.contains_point(&b.pose, e) {
-            continue;
-        }
-        match b.shape.as_compound() {
-            Some(c) => {
-                for (part_pose, part) in c.shapes() {
-                    let pb = part.compute_aabb(&(b.pose * *part_pose)).loosened(1e-4);
-                    if pb.intersects(&region) {
-                        occluders.push(Occluder {
-                            aabb: pb,
-                            pose: b.pose,
-                            part: Some(*part_pose),
-                            shape: &**part,
-                        });
-                    }
-                }
-            }
-            None => occluders.push(Occluder {
-                aabb: bb,
-                pose: b.pose,
-                part: None,
-                shape: &**b.shape,
-            }),
-        }
-    }
+    let occluders = occluders_in(&bodies, target, &region, e);
 
     // One convex occluder in front of the whole target (it cuts the four corner rays of the
     // grid nearer than any point of the target's bounds) cuts every ray of the grid: each is a
@@ -233,6 +203,48 @@ pub fn visibility_from_upto(
         }
     }
     vis
+}
+
+/// The bodies (compound ones split into their parts) whose bounds meet `region`, except the
+/// target and any body the eye `e` is inside of.
+fn occluders_in<'w>(
+    bodies: &'w [Body<'w>],
+    target: ObjectId,
+    region: &Aabb,
+    e: Vector,
+) -> Vec<Occluder<'w>> {
+    let mut occluders: Vec<Occluder<'w>> = Vec::new();
+    for b in bodies {
+        if b.owner == BodyOwner::Object(target) {
+            continue;
+        }
+        let bb = b.shape.compute_aabb(&b.pose);
+        if !bb.intersects(region) || b.shape.contains_point(&b.pose, e) {
+            continue;
+        }
+        match b.shape.as_compound() {
+            Some(c) => {
+                for (part_pose, part) in c.shapes() {
+                    let pb = part.compute_aabb(&(b.pose * *part_pose)).loosened(1e-4);
+                    if pb.intersects(region) {
+                        occluders.push(Occluder {
+                            aabb: pb,
+                            pose: b.pose,
+                            part: Some(*part_pose),
+                            shape: &**part,
+                        });
+                    }
+                }
+            }
+            None => occluders.push(Occluder {
+                aabb: bb,
+                pose: b.pose,
+                part: None,
+                shape: &**b.shape,
+            }),
+        }
+    }
+    occluders
 }
 
 /// A body, or one part of a compound body, that may cut rays.

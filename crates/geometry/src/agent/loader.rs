@@ -164,6 +164,41 @@ fn convert_geometry(
 
 pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelError> {
     let ctx = Ctx { text, source_name };
+    let robot = parse_robot(text, source_name)?;
+    let (urdf_link, urdf_joint) = unique_names(&ctx, &robot)?;
+    let tree = Tree::of(&ctx, &robot, &urdf_link)?;
+    let links = tree.links(&ctx, &robot, &urdf_link)?;
+    let (mut joints, joint_index) = tree.joints(&ctx, &robot, &urdf_link)?;
+    apply_mimics(&ctx, &robot, &tree, &urdf_joint, &joint_index, &mut joints)?;
+    let dofs = DofColumns::of(&robot, &urdf_joint, &mut joints);
+    let link_index = links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.name.clone(), i))
+        .collect();
+    Ok(AgentModel {
+        name: robot.name.clone(),
+        source_name: source_name.to_string(),
+        urdf: Arc::from(text),
+        semantics: Arc::default(),
+        links,
+        joints,
+        link_index,
+        joint_index,
+        dofs: Arc::new(DofTable {
+            model: robot.name,
+            names: dofs.names,
+            limits: dofs.limits,
+            index: dofs.index,
+        }),
+        dof_joints: dofs.joints,
+        dof_velocity_limits: dofs.velocity_limits,
+        dof_acceleration_limits: dofs.acceleration_limits,
+    })
+}
+
+/// The URDF document read by urdf-rs; a syntax error names the line it quotes.
+fn parse_robot(text: &str, source_name: &str) -> Result<urdf_rs::Robot, ModelError> {
     // urdf-rs should not panic, but a malformed document must never take the caller down.
     let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text));
     let robot = match parsed {
@@ -191,7 +226,18 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
             message: format!("robot '{}' has no <link>", robot.name),
         });
     }
+    Ok(robot)
+}
 
+/// Names to their index in the URDF document.
+type NameIndex<'r> = HashMap<&'r str, usize>;
+
+/// Link and joint names to their URDF indices; names must be unique and non-empty.
+fn unique_names<'r>(
+    ctx: &Ctx,
+    robot: &'r urdf_rs::Robot,
+) -> Result<(NameIndex<'r>, NameIndex<'r>), ModelError> {
+    let source_name = ctx.source_name;
     // Names must be unique and non-empty.
     let mut urdf_link: HashMap<&str, usize> = HashMap::new();
     for (i, l) in robot.links.iter().enumerate() {
@@ -227,202 +273,269 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
             ));
         }
     }
+    Ok((urdf_link, urdf_joint))
+}
 
-    // Tree structure: each link has at most one parent joint; exactly one root.
-    let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
-    let mut children_of: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
-    for (ji, j) in robot.joints.iter().enumerate() {
-        let p = *urdf_link.get(j.parent.link.as_str()).ok_or_else(|| {
-            ctx.invalid(
-                "joint",
-                &j.name,
-                format!(
-                    "joint '{}': parent link '{}' is not defined",
-                    j.name, j.parent.link
-                ),
-            )
-        })?;
-        let c = *urdf_link.get(j.child.link.as_str()).ok_or_else(|| {
-            ctx.invalid(
-                "joint",
-                &j.name,
-                format!(
-                    "joint '{}': child link '{}' is not defined",
-                    j.name, j.child.link
-                ),
-            )
-        })?;
-        if p == c {
-            return Err(ctx.invalid(
-                "joint",
-                &j.name,
-                format!(
-                    "joint '{}' connects link '{}' to itself",
-                    j.name, j.parent.link
-                ),
-            ));
-        }
-        if let Some(other) = parent_joint_of[c] {
-            return Err(ctx.invalid(
-                "joint",
-                &j.name,
-                format!(
-                    "link '{}' has two parent joints ('{}' and '{}'); a URDF is a tree",
-                    j.child.link, robot.joints[other].name, j.name
-                ),
-            ));
-        }
-        parent_joint_of[c] = Some(ji);
-        children_of[p].push(c);
-    }
-    let roots: Vec<usize> = (0..robot.links.len())
-        .filter(|&i| parent_joint_of[i].is_none())
-        .collect();
-    if roots.is_empty() {
-        return Err(ModelError::Invalid {
-            source_name: source_name.to_string(),
-            line: None,
-            message: "every link has a parent joint: the joints form a cycle".to_string(),
-        });
-    }
-    if roots.len() > 1 {
-        let names: Vec<&str> = roots
-            .iter()
-            .map(|&i| robot.links[i].name.as_str())
-            .collect();
-        return Err(ctx.invalid(
-            "link",
-            names[1],
-            format!(
-                "the links are not one tree: {} links have no parent joint ({})",
-                names.len(),
-                names.join(", ")
-            ),
-        ));
-    }
-    // Topological order (breadth first from the root); links not reached lie on a cycle.
-    let mut order = vec![roots[0]];
-    let mut k = 0;
-    while k < order.len() {
-        let l = order[k];
-        order.extend(children_of[l].iter().copied());
-        k += 1;
-    }
-    if order.len() != robot.links.len() {
-        let reached: std::collections::HashSet<usize> = order.iter().copied().collect();
-        let on_cycle = (0..robot.links.len())
-            .find(|i| !reached.contains(i))
-            .unwrap_or(0);
-        let name = &robot.links[on_cycle].name;
-        return Err(ctx.invalid(
-            "link",
-            name,
-            format!(
-                "link '{name}' is not connected to the root '{}': its joints form a cycle",
-                robot.links[roots[0]].name
-            ),
-        ));
-    }
-    let mut new_index = vec![0usize; robot.links.len()];
-    for (n, &old) in order.iter().enumerate() {
-        new_index[old] = n;
-    }
+/// The link tree of a URDF document: parent joint and children per URDF link, and the links in
+/// topological order (breadth first from the one root).
+struct Tree {
+    parent_joint_of: Vec<Option<usize>>,
+    children_of: Vec<Vec<usize>>,
+    order: Vec<usize>,
+    new_index: Vec<usize>,
+}
 
-    // Links.
-    let mut links = Vec::with_capacity(order.len());
-    for &old in &order {
-        let l = &robot.links[old];
-        let collisions = l
-            .collision
-            .iter()
-            .map(|c| convert_geometry(&ctx, &l.name, c))
-            .collect::<Result<Vec<_>, _>>()?;
-        let parent = parent_joint_of[old]
-            .map(|j| new_index[urdf_link[robot.joints[j].parent.link.as_str()]]);
-        links.push(Link {
-            name: l.name.clone(),
-            parent,
-            parent_joint: parent_joint_of[old].map(|_| new_index[old] - 1),
-            children: children_of[old].iter().map(|&c| new_index[c]).collect(),
-            collisions,
-        });
-    }
-
-    // Joints, in child-link order: joint n has child link n + 1.
-    let mut joints = Vec::with_capacity(order.len() - 1);
-    let mut joint_index = HashMap::new();
-    for &old_link in &order[1..] {
-        let ji = parent_joint_of[old_link].expect("non-root link has a parent joint");
-        let j = &robot.joints[ji];
-        let bad = |m: String| ctx.invalid("joint", &j.name, format!("joint '{}': {m}", j.name));
-        let kind = match j.joint_type {
-            urdf_rs::JointType::Fixed => JointKind::Fixed,
-            urdf_rs::JointType::Revolute => JointKind::Revolute,
-            urdf_rs::JointType::Continuous => JointKind::Continuous,
-            urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-            ref other => {
-                return Err(bad(format!(
-                    "type {other:?} is not supported (fixed, revolute, continuous or \
-                     prismatic; the scene places the base)"
+impl Tree {
+    fn of(
+        ctx: &Ctx,
+        robot: &urdf_rs::Robot,
+        urdf_link: &HashMap<&str, usize>,
+    ) -> Result<Tree, ModelError> {
+        let source_name = ctx.source_name;
+        // Tree structure: each link has at most one parent joint; exactly one root.
+        let mut parent_joint_of: Vec<Option<usize>> = vec![None; robot.links.len()];
+        let mut children_of: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+        for (ji, j) in robot.joints.iter().enumerate() {
+            let p = *urdf_link.get(j.parent.link.as_str()).ok_or_else(|| {
+                ctx.invalid(
+                    "joint",
+                    &j.name,
+                    format!(
+                        "joint '{}': parent link '{}' is not defined",
+                        j.name, j.parent.link
+                    ),
                 )
-                .to_lowercase()));
+            })?;
+            let c = *urdf_link.get(j.child.link.as_str()).ok_or_else(|| {
+                ctx.invalid(
+                    "joint",
+                    &j.name,
+                    format!(
+                        "joint '{}': child link '{}' is not defined",
+                        j.name, j.child.link
+                    ),
+                )
+            })?;
+            if p == c {
+                return Err(ctx.invalid(
+                    "joint",
+                    &j.name,
+                    format!(
+                        "joint '{}' connects link '{}' to itself",
+                        j.name, j.parent.link
+                    ),
+                ));
             }
-        };
-        if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
+            if let Some(other) = parent_joint_of[c] {
+                return Err(ctx.invalid(
+                    "joint",
+                    &j.name,
+                    format!(
+                        "link '{}' has two parent joints ('{}' and '{}'); a URDF is a tree",
+                        j.child.link, robot.joints[other].name, j.name
+                    ),
+                ));
+            }
+            parent_joint_of[c] = Some(ji);
+            children_of[p].push(c);
+        }
+        let roots: Vec<usize> = (0..robot.links.len())
+            .filter(|&i| parent_joint_of[i].is_none())
+            .collect();
+        if roots.is_empty() {
+            return Err(ModelError::Invalid {
+                source_name: source_name.to_string(),
+                line: None,
+                message: "every link has a parent joint: the joints form a cycle".to_string(),
+            });
+        }
+        if roots.len() > 1 {
+            let names: Vec<&str> = roots
+                .iter()
+                .map(|&i| robot.links[i].name.as_str())
+                .collect();
+            return Err(ctx.invalid(
+                "link",
+                names[1],
+                format!(
+                    "the links are not one tree: {} links have no parent joint ({})",
+                    names.len(),
+                    names.join(", ")
+                ),
+            ));
+        }
+        // Topological order (breadth first from the root); links not reached lie on a cycle.
+        let mut order = vec![roots[0]];
+        let mut k = 0;
+        while k < order.len() {
+            let l = order[k];
+            order.extend(children_of[l].iter().copied());
+            k += 1;
+        }
+        if order.len() != robot.links.len() {
+            let reached: std::collections::HashSet<usize> = order.iter().copied().collect();
+            let on_cycle = (0..robot.links.len())
+                .find(|i| !reached.contains(i))
+                .unwrap_or(0);
+            let name = &robot.links[on_cycle].name;
+            return Err(ctx.invalid(
+                "link",
+                name,
+                format!(
+                    "link '{name}' is not connected to the root '{}': its joints form a cycle",
+                    robot.links[roots[0]].name
+                ),
+            ));
+        }
+        let mut new_index = vec![0usize; robot.links.len()];
+        for (n, &old) in order.iter().enumerate() {
+            new_index[old] = n;
+        }
+        Ok(Tree {
+            parent_joint_of,
+            children_of,
+            order,
+            new_index,
+        })
+    }
+
+    /// The links in topological order with their collision shapes.
+    fn links(
+        &self,
+        ctx: &Ctx,
+        robot: &urdf_rs::Robot,
+        urdf_link: &HashMap<&str, usize>,
+    ) -> Result<Vec<Link>, ModelError> {
+        let Tree {
+            parent_joint_of,
+            children_of,
+            order,
+            new_index,
+        } = self;
+        // Links.
+        let mut links = Vec::with_capacity(order.len());
+        for &old in order {
+            let l = &robot.links[old];
+            let collisions = l
+                .collision
+                .iter()
+                .map(|c| convert_geometry(ctx, &l.name, c))
+                .collect::<Result<Vec<_>, _>>()?;
+            let parent = parent_joint_of[old]
+                .map(|j| new_index[urdf_link[robot.joints[j].parent.link.as_str()]]);
+            links.push(Link {
+                name: l.name.clone(),
+                parent,
+                parent_joint: parent_joint_of[old].map(|_| new_index[old] - 1),
+                children: children_of[old].iter().map(|&c| new_index[c]).collect(),
+                collisions,
+            });
+        }
+        Ok(links)
+    }
+
+    /// The joints in child-link order (joint n has child link n + 1), and their index by name.
+    fn joints(
+        &self,
+        ctx: &Ctx,
+        robot: &urdf_rs::Robot,
+        urdf_link: &HashMap<&str, usize>,
+    ) -> Result<(Vec<Joint>, HashMap<String, usize>), ModelError> {
+        let mut joints = Vec::with_capacity(self.order.len() - 1);
+        let mut joint_index = HashMap::new();
+        for &old_link in &self.order[1..] {
+            let ji = self.parent_joint_of[old_link].expect("non-root link has a parent joint");
+            let j = &robot.joints[ji];
+            let mut joint = convert_joint(ctx, j)?;
+            joint.parent = self.new_index[urdf_link[j.parent.link.as_str()]];
+            joint.child = self.new_index[old_link];
+            joint_index.insert(j.name.clone(), joints.len());
+            joints.push(joint);
+        }
+        Ok((joints, joint_index))
+    }
+}
+
+/// One URDF joint converted (its `parent` and `child` are set by the caller).
+fn convert_joint(ctx: &Ctx, j: &urdf_rs::Joint) -> Result<Joint, ModelError> {
+    let bad = |m: String| ctx.invalid("joint", &j.name, format!("joint '{}': {m}", j.name));
+    let kind = match j.joint_type {
+        urdf_rs::JointType::Fixed => JointKind::Fixed,
+        urdf_rs::JointType::Revolute => JointKind::Revolute,
+        urdf_rs::JointType::Continuous => JointKind::Continuous,
+        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+        ref other => {
             return Err(bad(format!(
-                "origin has a non-finite number (xyz {:?}, rpy {:?})",
-                j.origin.xyz.0, j.origin.rpy.0
+                "type {other:?} is not supported (fixed, revolute, continuous or \
+                 prismatic; the scene places the base)"
+            )
+            .to_lowercase()));
+        }
+    };
+    if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
+        return Err(bad(format!(
+            "origin has a non-finite number (xyz {:?}, rpy {:?})",
+            j.origin.xyz.0, j.origin.rpy.0
+        )));
+    }
+    let [ax, ay, az] = j.axis.xyz.0;
+    let norm = (ax * ax + ay * ay + az * az).sqrt();
+    let mut axis = Vector::X;
+    if kind != JointKind::Fixed {
+        if !norm.is_finite() || norm < 1e-9 {
+            return Err(bad(format!(
+                "axis {:?} is not a finite non-zero vector",
+                j.axis.xyz.0
             )));
         }
-        let [ax, ay, az] = j.axis.xyz.0;
-        let norm = (ax * ax + ay * ay + az * az).sqrt();
-        let mut axis = Vector::X;
-        if kind != JointKind::Fixed {
-            if !norm.is_finite() || norm < 1e-9 {
+        axis = Vector::new((ax / norm) as f32, (ay / norm) as f32, (az / norm) as f32);
+    }
+    let limits = match kind {
+        JointKind::Fixed | JointKind::Continuous => JointLimits::UNLIMITED,
+        JointKind::Revolute | JointKind::Prismatic => {
+            let (lo, hi) = (j.limit.lower, j.limit.upper);
+            if !lo.is_finite() || !hi.is_finite() {
                 return Err(bad(format!(
-                    "axis {:?} is not a finite non-zero vector",
-                    j.axis.xyz.0
+                    "limits [{lo}, {hi}] must be finite (use a continuous joint for an \
+                     unlimited rotation)"
                 )));
             }
-            axis = Vector::new((ax / norm) as f32, (ay / norm) as f32, (az / norm) as f32);
-        }
-        let limits = match kind {
-            JointKind::Fixed | JointKind::Continuous => JointLimits::UNLIMITED,
-            JointKind::Revolute | JointKind::Prismatic => {
-                let (lo, hi) = (j.limit.lower, j.limit.upper);
-                if !lo.is_finite() || !hi.is_finite() {
-                    return Err(bad(format!(
-                        "limits [{lo}, {hi}] must be finite (use a continuous joint for an \
-                         unlimited rotation)"
-                    )));
-                }
-                if lo >= hi {
-                    return Err(bad(format!(
-                        "lower limit {lo} must be below upper limit {hi} (a missing <limit> \
-                         reads as [0, 0])"
-                    )));
-                }
-                JointLimits {
-                    lower: lo as f32,
-                    upper: hi as f32,
-                }
+            if lo >= hi {
+                return Err(bad(format!(
+                    "lower limit {lo} must be below upper limit {hi} (a missing <limit> \
+                     reads as [0, 0])"
+                )));
             }
-        };
-        let n = joints.len();
-        joint_index.insert(j.name.clone(), n);
-        joints.push(Joint {
-            name: j.name.clone(),
-            kind,
-            parent: new_index[urdf_link[j.parent.link.as_str()]],
-            child: new_index[old_link],
-            origin: to_pose(&j.origin),
-            axis,
-            limits,
-            dof: None,
-            mimic: None,
-        });
-    }
+            JointLimits {
+                lower: lo as f32,
+                upper: hi as f32,
+            }
+        }
+    };
+    Ok(Joint {
+        name: j.name.clone(),
+        kind,
+        parent: 0,
+        child: 0,
+        origin: to_pose(&j.origin),
+        axis,
+        limits,
+        dof: None,
+        mimic: None,
+    })
+}
 
+/// Sets each mimic joint's master, multiplier and offset.
+fn apply_mimics(
+    ctx: &Ctx,
+    robot: &urdf_rs::Robot,
+    tree: &Tree,
+    urdf_joint: &HashMap<&str, usize>,
+    joint_index: &HashMap<String, usize>,
+    joints: &mut [Joint],
+) -> Result<(), ModelError> {
+    let order = &tree.order;
+    let parent_joint_of = &tree.parent_joint_of;
     // Mimic joints, then degrees of freedom.
     for &old_link in &order[1..] {
         let j = &robot.joints[parent_joint_of[old_link].expect("has parent joint")];
@@ -453,49 +566,54 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
             offset: off as f32,
         });
     }
-    let mut names = Vec::new();
-    let mut limits = Vec::new();
-    let mut index = HashMap::new();
-    let mut dof_joints = Vec::new();
-    let mut dof_velocity_limits = Vec::new();
-    let mut dof_acceleration_limits = Vec::new();
-    let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v as f32);
-    for (n, joint) in joints.iter_mut().enumerate() {
-        if joint.kind != JointKind::Fixed && joint.mimic.is_none() {
-            let limit = urdf_joint
-                .get(joint.name.as_str())
-                .map(|&i| &robot.joints[i].limit);
-            dof_velocity_limits.push(limit.and_then(|l| positive(l.velocity)));
-            dof_acceleration_limits.push(limit.and_then(|l| positive(l.acceleration)));
-            joint.dof = Some(names.len());
-            index.insert(joint.name.clone(), names.len());
-            names.push(joint.name.clone());
-            limits.push(joint.limits);
-            dof_joints.push(n);
+    Ok(())
+}
+
+/// The degrees of freedom (movable joints that mimic none), one column per property.
+struct DofColumns {
+    names: Vec<String>,
+    limits: Vec<JointLimits>,
+    index: HashMap<String, usize>,
+    joints: Vec<usize>,
+    velocity_limits: Vec<Option<f32>>,
+    acceleration_limits: Vec<Option<f32>>,
+}
+
+impl DofColumns {
+    /// Numbers the degrees of freedom of `joints` (setting each one's `dof`).
+    fn of(
+        robot: &urdf_rs::Robot,
+        urdf_joint: &HashMap<&str, usize>,
+        joints: &mut [Joint],
+    ) -> DofColumns {
+        let mut names = Vec::new();
+        let mut limits = Vec::new();
+        let mut index = HashMap::new();
+        let mut dof_joints = Vec::new();
+        let mut dof_velocity_limits = Vec::new();
+        let mut dof_acceleration_limits = Vec::new();
+        let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v as f32);
+        for (n, joint) in joints.iter_mut().enumerate() {
+            if joint.kind != JointKind::Fixed && joint.mimic.is_none() {
+                let limit = urdf_joint
+                    .get(joint.name.as_str())
+                    .map(|&i| &robot.joints[i].limit);
+                dof_velocity_limits.push(limit.and_then(|l| positive(l.velocity)));
+                dof_acceleration_limits.push(limit.and_then(|l| positive(l.acceleration)));
+                joint.dof = Some(names.len());
+                index.insert(joint.name.clone(), names.len());
+                names.push(joint.name.clone());
+                limits.push(joint.limits);
+                dof_joints.push(n);
+            }
         }
-    }
-    let link_index = links
-        .iter()
-        .enumerate()
-        .map(|(i, l)| (l.name.clone(), i))
-        .collect();
-    Ok(AgentModel {
-        name: robot.name.clone(),
-        source_name: source_name.to_string(),
-        urdf: Arc::from(text),
-        semantics: Arc::default(),
-        links,
-        joints,
-        link_index,
-        joint_index,
-        dofs: Arc::new(DofTable {
-            model: robot.name,
+        DofColumns {
             names,
             limits,
             index,
-        }),
-        dof_joints,
-        dof_velocity_limits,
-        dof_acceleration_limits,
-    })
+            joints: dof_joints,
+            velocity_limits: dof_velocity_limits,
+            acceleration_limits: dof_acceleration_limits,
+        }
+    }
 }
