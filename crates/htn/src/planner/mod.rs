@@ -18,13 +18,13 @@
 //! unsolvable.
 //!
 //! Pruning that loses no plan (all of it sound):
-//! - *precondition pull-up* (`compile`): a method's precondition gains its first subtask's
-//!   precondition (evaluated in the same state) and the static literals of all its primitive
+//! - *precondition pull-up* (`compile/pull_up.rs`): a method's precondition gains its first
+//!   subtask's precondition (evaluated in the same state) and the static literals of all its primitive
 //!   subtasks, climbing through abstract tasks (a task requires what every one of its methods
 //!   requires over its arguments), so bindings fail early and bind through static facts
 //!   (indexed by argument);
-//! - *goal relevance* (`search`): each suffix of the task network carries the set of goal
-//!   literals its tasks may achieve (per ground task, through the methods whose arguments and
+//! - *goal relevance* (`search/relevance.rs`): each suffix of the task network carries the
+//!   set of goal literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
 //!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
 //!   achiever (a parameterless action) must be achieved while that literal is false;
@@ -34,9 +34,10 @@
 //!   added) still hold; else the node is a dead end (Multiarm-Blocksworld's consumed
 //!   `goal_on` markers).
 //!
-//! Fallback: with a time limit, on a purely symbolic problem, the depth-first search gets the
-//! first `1 - best_first_share` of the time; if it has found no plan by then, a weighted
-//! best-first progression search (`search/bfs.rs`, as pandaPI's) takes the rest. It finds the
+//! Fallback (`search/driver.rs`): with a time limit, on a purely symbolic problem, the
+//! depth-first search gets the first `1 - best_first_share` of the time; if it has found no
+//! plan by then, a weighted best-first progression search (`search/bfs.rs`, as pandaPI's)
+//! takes the rest. It finds the
 //! plans of learned domains (Freecell) that amount to a blind state-space search, where the
 //! domain-order depth-first search gets lost in abstract descent.
 

@@ -65,12 +65,14 @@ struct Cell {
     may: u32,
 }
 
+/// An action of the plan so far, with its geometric solution for a GS action.
 struct Step {
     occ: u32,
     task: u32,
     geo: Option<GeoStep>,
 }
 
+/// A decomposition of the plan so far (a task, its method and its subtasks' ids).
 struct TreeRec {
     occ: u32,
     /// Ground task id, or `NIL` for the initial task network.
@@ -86,6 +88,7 @@ struct TreeRec {
     state: u64,
 }
 
+/// Why an engine stopped.
 enum Stop {
     Found,
     /// The depth-first search used its share of the time: the best-first search takes over.
@@ -94,6 +97,7 @@ enum Stop {
     Limit(Limit),
 }
 
+/// The search: the core state every engine works on, and each engine's bookkeeping.
 pub(crate) struct Search<'a, 'o> {
     c: &'a Compiled,
     opts: PlannerOptions,
@@ -118,12 +122,14 @@ pub(crate) struct Search<'a, 'o> {
     loop_check: bool,
     stats: SearchStats,
     start: Instant,
-    /// When the resident memory is read next (every [`MEMORY_CHECK_EVERY`]).
+    /// When the resident memory is read next (every `limits::MEMORY_CHECK_EVERY`).
     next_memory_check: Instant,
     /// A table's doubling would have passed the memory limit ([`Search::growth_fits`]).
     memory_reached: bool,
     effects: EffectBuf,
+    /// Normal search, or replaying a path for a repair (`repair.rs`).
     mode: Mode,
+    /// The choices a replay still has to take, oldest first.
     forced: VecDeque<Key>,
     repair: Option<Repair>,
     salt: u64,
