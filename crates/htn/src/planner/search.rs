@@ -17,6 +17,7 @@ use super::{
 
 mod bfs;
 mod guard;
+mod heuristic;
 
 const NIL: u32 = u32::MAX;
 
