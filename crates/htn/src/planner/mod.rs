@@ -202,6 +202,12 @@ pub struct SearchStats {
     pub best_first: bool,
     #[serde(default)]
     pub best_first_nodes: u64,
+    /// Ground actions and methods of the best-first search's relaxed composition (both 0
+    /// when it was not ground: no fallback, or a cap of `search/heuristic.rs` stopped it).
+    #[serde(default)]
+    pub rc_actions: u64,
+    #[serde(default)]
+    pub rc_methods: u64,
     /// Wall-clock time of the search, in seconds.
     pub time_s: f64,
     /// Peak resident memory of the process seen during the search, in KiB (0 if unknown).

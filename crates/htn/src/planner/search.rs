@@ -30,6 +30,7 @@ use super::{Limit, PlanError, PlannerOptions, SearchStats};
 
 mod bfs;
 mod guard;
+mod heuristic;
 
 mod dfs;
 mod driver;

@@ -1,10 +1,12 @@
 //! The fallback search: weighted A* (best-first) progression over search nodes (state, task
 //! network), as in pandaPI's progression search. A node's successors are those of its first
 //! task: the action applied, or every method and binding that applies. Each (state, network)
-//! pair is generated once (duplicate detection). The heuristic is the network's least number
-//! of actions ignoring states: the sum over its tasks of the fewest actions any decomposition
-//! of the task may end with (a task with no decomposition at all makes the node a dead end).
-//! Ties go to the newest node, so a plateau is searched depth first.
+//! pair is generated once (duplicate detection). The heuristic is pandaPI's relaxed
+//! composition with h_add (`heuristic.rs`) when its grounding fits its caps; otherwise the
+//! network's least number of actions, looking a few levels of decomposition down in the
+//! state (the sum over its tasks of the fewest actions any decomposition of the task may end
+//! with). A node whose estimate is infinite has no plan below it and is dropped. Ties go to
+//! the newest node, so a plateau is searched depth first.
 //!
 //! It runs only on purely symbolic problems (no geometric back end) and only when the
 //! depth-first search used its share of the time limit: there it finds plans the domain-order
@@ -20,6 +22,7 @@ use crate::state::{FxHasher, FxMap};
 use super::super::compile::{CTerm, Compiled};
 use super::super::eval::{Eval, UNBOUND};
 use super::super::{Limit, current_rss_kb};
+use super::heuristic::{Caps, MAX_ACTIONS, MAX_METHODS, Rc};
 use super::{Cell, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth};
 
 /// An unreachable cost.
@@ -99,6 +102,11 @@ struct States {
 /// over actions: abstract steps cost nothing).
 const G_WEIGHT: u32 = 1;
 const H_WEIGHT: u32 = 3;
+/// The weight of the relaxed-composition estimate (h_add counts actions more than once, so
+/// it weighs less than the state-free lower bound).
+const RC_H_WEIGHT: u32 = 2;
+/// The share of the time left that the grounding of the relaxed composition may take.
+const GROUNDING_SHARE: f64 = 0.3;
 /// How many levels of decomposition the heuristic looks at in the current state.
 const LOOKAHEAD: u8 = 2;
 /// How many bindings of a method the heuristic looks at.
@@ -107,12 +115,15 @@ const LOOK_BINDINGS: usize = 4;
 /// their state-free costs).
 const LOOK_TASKS: usize = 64;
 
-/// The heuristic's memory: the lifted costs and the estimates per (ground task, state, depth).
+/// The heuristic's memory: the lifted costs and the estimates per (ground task, state, depth);
+/// the relaxed composition when it was ground, and the state it was last evaluated in.
 struct Heur {
     cost: Vec<u32>,
     memo: FxMap<(u32, u32, u8), u32>,
     depth: u8,
     k: usize,
+    rc: Option<Rc>,
+    rc_state: u32,
 }
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -168,6 +179,20 @@ impl<'a, 'o> Search<'a, 'o> {
 
     /// The heuristic value of network `top` in the current state `sid`.
     fn net_estimate(&mut self, top: u32, sid: u32, hr: &mut Heur, cell_cost: &[u32]) -> u32 {
+        if let Some(rc) = hr.rc.as_mut() {
+            if hr.rc_state != sid {
+                rc.evaluate(&self.state);
+                hr.rc_state = sid;
+            }
+            let mut h = rc.goal_cost();
+            let mut cur = top;
+            while cur != NIL && h < INF {
+                let cell = self.arena[cur as usize];
+                h = (h + rc.task_cost(cell.task, self.gtasks.key(cell.task))).min(INF);
+                cur = cell.next;
+            }
+            return h;
+        }
         let mut h = 0u32;
         let mut cur = top;
         let mut k = 0;
@@ -266,11 +291,19 @@ impl<'a, 'o> Search<'a, 'o> {
         self.stats.best_first = true;
         let (wg, wh) = (G_WEIGHT, H_WEIGHT);
         let cost = min_costs(c);
+        let rc = Rc::build(c, self.grounding_caps());
+        let wh = if rc.is_some() { RC_H_WEIGHT } else { wh };
+        if let Some(rc) = &rc {
+            self.stats.rc_actions = rc.n_actions as u64;
+            self.stats.rc_methods = rc.n_methods as u64;
+        }
         let mut hr = Heur {
             cost: cost.clone(),
             memo: FxMap::default(),
             depth: LOOKAHEAD,
             k: LOOK_BINDINGS,
+            rc,
+            rc_state: u32::MAX,
         };
         let mut states = States::default();
         let mut nodes: Vec<Node> = Vec::new();
@@ -298,6 +331,9 @@ impl<'a, 'o> Search<'a, 'o> {
                 continue;
             }
             let h = self.net_estimate(top, sid0, &mut hr, &cell_cost);
+            if h >= INF {
+                continue;
+            }
             nodes.push(Node {
                 parent: NIL,
                 state: sid0,
@@ -310,6 +346,7 @@ impl<'a, 'o> Search<'a, 'o> {
             seq -= 1;
         }
         let mut scratch: Vec<(u32, Vec<u32>)> = Vec::new();
+        let mut rss = RssCache::default();
         while let Some(Reverse((_, _, ni))) = open.pop() {
             self.stats.nodes += 1;
             self.stats.best_first_nodes += 1;
@@ -321,7 +358,10 @@ impl<'a, 'o> Search<'a, 'o> {
                 + table_growth::<((u32, u32, u8), u32)>(hr.memo.len(), hr.memo.capacity())
                 + vec_growth::<u32>(cell_cost.len(), cell_cost.capacity())
                 + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
-            if !self.growth_fits(growth) {
+            if growth > 0
+                && let Some(mb) = self.opts.limits.memory_mb
+                && rss.get().saturating_add(growth as u64 >> 10) > mb.saturating_mul(1024)
+            {
                 return Stop::Limit(Limit::Memory);
             }
             if let Some(l) = self.check_limits() {
@@ -383,6 +423,10 @@ impl<'a, 'o> Search<'a, 'o> {
                     self.stats.revisits_pruned += 1;
                     continue;
                 }
+                let h = self.net_estimate(cell.next, sid2, &mut hr, &cell_cost);
+                if h >= INF {
+                    continue;
+                }
                 nodes.push(Node {
                     parent: ni,
                     state: sid2,
@@ -394,7 +438,6 @@ impl<'a, 'o> Search<'a, 'o> {
                         task: cell.task,
                     },
                 });
-                let h = self.net_estimate(cell.next, sid2, &mut hr, &cell_cost);
                 let h = prio(g + 1, h, wg, wh);
                 open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
                 seq -= 1;
@@ -430,6 +473,9 @@ impl<'a, 'o> Search<'a, 'o> {
                     continue;
                 }
                 let h = self.net_estimate(top, sid, &mut hr, &cell_cost);
+                if h >= INF {
+                    continue;
+                }
                 let h = prio(g, h, wg, wh);
                 nodes.push(Node {
                     parent: ni,
@@ -450,6 +496,22 @@ impl<'a, 'o> Search<'a, 'o> {
             }
         }
         Stop::Exhausted
+    }
+
+    /// What the grounding of the relaxed composition may spend: its caps, a share of the
+    /// time left and the memory limit.
+    fn grounding_caps(&self) -> Caps {
+        let l = self.opts.limits;
+        let deadline = l.time.map(|t| {
+            let left = t.saturating_sub(self.start.elapsed());
+            std::time::Instant::now() + left.mul_f64(GROUNDING_SHARE)
+        });
+        Caps {
+            actions: MAX_ACTIONS,
+            methods: MAX_METHODS,
+            deadline,
+            memory_kb: l.memory_mb.map(|mb| mb.saturating_mul(1024)),
+        }
     }
 
     /// Pushes `subs` under `binding` on top of network `next` (whose cost is `rest`), with
@@ -535,6 +597,28 @@ impl<'a, 'o> Search<'a, 'o> {
                 }),
             }
         }
+    }
+}
+
+/// The resident memory, read from /proc at most every [`RSS_EVERY`]: small tables are
+/// "about to double" at almost every node, and a read of /proc per node showed in profiles.
+#[derive(Default)]
+struct RssCache {
+    kb: u64,
+    at: Option<std::time::Instant>,
+}
+
+/// How long a reading of the resident memory is used.
+const RSS_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
+impl RssCache {
+    fn get(&mut self) -> u64 {
+        let now = std::time::Instant::now();
+        if self.at.is_none_or(|t| now.duration_since(t) >= RSS_EVERY) {
+            self.kb = current_rss_kb();
+            self.at = Some(now);
+        }
+        self.kb
     }
 }
 
