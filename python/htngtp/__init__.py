@@ -498,6 +498,7 @@ def plan(
     other solutions of earlier geometric tasks first, the paper's Fig. 3). The search is
     deterministic for a ``seed``. ``time_limit`` (s) and ``memory_limit`` (MiB of the
     process's resident memory) cover reading the files too; ``node_limit`` bounds the search.
+    Calls from several threads run one at a time (the limits of reading are process-wide).
 
     Raises :class:`ParseError` (with ``file``, ``line``, ``column``) for an invalid HDDL file,
     :class:`SceneError` for an invalid scene, :class:`LimitReached` when a limit stopped the

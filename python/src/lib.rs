@@ -504,7 +504,7 @@ fn gtp_call<'py>(
 }
 
 /// The same call as [`gtp_call`] entirely in Rust, timed: the seconds from the request to the last
-/// solution's timed trajectories, with no Python object made. `htngtp/bench/overhead.py`
+/// solution's timed trajectories, with no Python object made. `python/bench/overhead.py`
 /// compares it with the Python call.
 #[pyfunction]
 #[pyo3(signature = (world, task, args, seed = 1, solutions = 1, settings = Vec::new()))]
@@ -642,6 +642,12 @@ fn symbolic_json(domain: &str, problem: &str, plan: &htn::plan::Plan, stats: Val
 
 /// Runs a plan request (without the GIL): the plan JSON text of the plan found, or why none.
 fn run_plan(req: PlanRequest) -> Result<String, Stopped> {
+    // The budget of reading and parsing is process-wide (`htn::budget`): one plan call at a
+    // time, so that calls from several Python threads do not overwrite each other's limits.
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _turn = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let began = Instant::now();
     // The limits cover reading and parsing, as on the command line.
     htn::budget::set(began.checked_add(req.time_limit), Some(req.memory_mb));
