@@ -194,7 +194,8 @@ class Trajectory:
 @dataclass(frozen=True)
 class Solution:
     """One solution of a GTP call: ``summary`` (grasp, placement, visibility, reach effort,
-    trajectories' joints and waypoints, as ``htngtp gtp --json``), ``stats`` (what producing
+    the trajectories' phases, joints and lengths, as ``htngtp gtp --json`` without the
+    waypoints, which are each :class:`Trajectory`'s ``waypoints``), ``stats`` (what producing
     this solution took: the paper's Table II columns), the timed ``trajectories``, and the
     ``world`` after it."""
 
@@ -242,6 +243,29 @@ def _trajectory(d: Mapping[str, Any]) -> Trajectory:
     )
 
 
+def _gtp_result(task: str, args: Sequence[str], raw: Mapping[str, Any]) -> GtpResult:
+    """The :class:`GtpResult` of the native module's answer; raises :class:`Unsolvable` or
+    :class:`LimitReached` when it has no solution."""
+    stats = json.loads(raw["stats"])
+    failure = json.loads(raw["failure"]) if raw["failure"] else None
+    found = [
+        Solution(
+            summary=json.loads(s["summary"]),
+            stats=json.loads(s["stats"]),
+            trajectories=[_trajectory(t) for t in s["trajectories"]],
+            world=World(s["world"]),
+        )
+        for s in raw["solutions"]
+    ]
+    if not found:
+        what = f"{task}({', '.join(args)})"
+        why = failure["message"] if failure else "no solution"
+        if failure and failure.get("limit"):
+            raise LimitReached(f"{what}: {why}", "time", json.dumps(stats))
+        raise Unsolvable(f"{what}: no solution: {why}", json.dumps(stats))
+    return GtpResult(task, tuple(args), found, stats, failure)
+
+
 def gtp(
     world: World,
     task: str,
@@ -282,24 +306,7 @@ def gtp(
         time_limit,
         max_acceleration,
     )
-    stats = json.loads(raw["stats"])
-    failure = json.loads(raw["failure"]) if raw["failure"] else None
-    found = [
-        Solution(
-            summary=json.loads(s["summary"]),
-            stats=json.loads(s["stats"]),
-            trajectories=[_trajectory(t) for t in s["trajectories"]],
-            world=World(s["world"]),
-        )
-        for s in raw["solutions"]
-    ]
-    if not found:
-        what = f"{task}({', '.join(args)})"
-        why = failure["message"] if failure else "no solution"
-        if failure and failure.get("limit"):
-            raise LimitReached(f"{what}: {why}", "time", json.dumps(stats))
-        raise Unsolvable(f"{what}: no solution: {why}", json.dumps(stats))
-    return GtpResult(task, tuple(args), found, stats, failure)
+    return _gtp_result(task, args, raw)
 
 
 @dataclass(frozen=True)

@@ -487,7 +487,7 @@ fn gtp_call<'py>(
     let list = PyList::empty(py);
     for (s, stats, trajectories) in out.solutions {
         let sd = PyDict::new(py);
-        sd.set_item("summary", to_json(&s.summary)?)?;
+        sd.set_item("summary", summary_json(&s.summary)?)?;
         sd.set_item("stats", to_json(&stats)?)?;
         sd.set_item("world", PyWorld { world: s.world })?;
         let ts = PyList::empty(py);
@@ -526,6 +526,18 @@ fn gtp_rust_seconds(
             .map_err(|e| PyValueError::new_err(e.to_string()))??;
         Ok((began.elapsed().as_secs_f64(), out.solutions.len()))
     })
+}
+
+/// A solution's summary as JSON text, without the trajectories' waypoints: they come as numpy
+/// arrays beside it (parsing them from JSON was most of the Python layer's cost).
+fn summary_json(summary: &gtp::solution::SolutionSummary) -> PyResult<String> {
+    let mut v = serde_json::to_value(summary).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    if let Some(ts) = v.get_mut("trajectories").and_then(Value::as_array_mut) {
+        for t in ts.iter_mut().filter_map(Value::as_object_mut) {
+            t.remove("waypoints");
+        }
+    }
+    Ok(v.to_string())
 }
 
 fn to_json(v: &impl serde::Serialize) -> PyResult<String> {
