@@ -1,5 +1,8 @@
 //! Collision truths on constructed cases.
 
+mod common;
+
+use common::posture;
 use std::sync::Arc;
 
 use geometry::agent::AgentModel;
@@ -451,15 +454,6 @@ fn the_two_held_objects_are_checked_against_each_other() {
     };
     assert!(pair(&checker(0.01)), "{:?}", checker(0.01).collisions(&q));
     assert!(!pair(&checker(0.2)), "{:?}", checker(0.2).collisions(&q));
-}
-
-/// The SRDF posture `name` of `model`, as `Configuration::set_many` takes it.
-fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
-    let state = model
-        .semantics()
-        .group_state(name)
-        .unwrap_or_else(|| panic!("the SRDF has no posture {name}"));
-    state.values.iter().map(|(j, v)| (j.as_str(), *v)).collect()
 }
 
 /// A pair the SRDF's `<disable_collisions>` names is left out, with that reason.

@@ -1,6 +1,9 @@
 //! Forward kinematics with known answers (hand-computed from the joint origins in
 //! `models/pr2.urdf` and `models/human.urdf`).
 
+mod common;
+
+use common::posture;
 use geometry::agent::AgentModel;
 use parry3d::math::{Pose, Rotation, Vector};
 
@@ -351,13 +354,4 @@ mod ik {
             .unwrap();
         assert!((got.translation - target.translation).length() < 1e-3);
     }
-}
-
-/// The SRDF posture `name` of `model`, as `Configuration::set_many` takes it.
-fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
-    let state = model
-        .semantics()
-        .group_state(name)
-        .unwrap_or_else(|| panic!("the SRDF has no posture {name}"));
-    state.values.iter().map(|(j, v)| (j.as_str(), *v)).collect()
 }
