@@ -575,10 +575,10 @@ fn agent_maps(
     let mstep = params.move_ray_step_deg.to_radians();
     let bstep = params.body_ray_step_deg.to_radians();
     // The frame the head turns in: the parent link of the head-pan joint (else the base).
-    let torso_link = eff
+    let head_parent = eff
         .head_pan
         .map(|r| model.joints()[model.dof_joint(r.dof)].parent);
-    let torso_rot = |base: Pose, q: &[f32]| match torso_link {
+    let torso_rot = |base: Pose, q: &[f32]| match head_parent {
         Some(l) => model.link_pose_by_id(base, q, l).rotation,
         None => base.rotation,
     };
