@@ -634,7 +634,7 @@ fn stance_eyes(
     let info = world.agent(agent);
     let (model, eff) = (&info.model, &info.effort);
     // The frame the head turns in: the parent link of the head-pan joint (else the base).
-    let torso_link = eff
+    let head_parent = eff
         .head_pan
         .map(|r| model.joints()[model.dof_joint(r.dof)].parent);
     let step = match level {
@@ -648,7 +648,7 @@ fn stance_eyes(
     let mut out: Vec<Eye> = Vec::new();
     for s in list {
         let eye = model.link_pose_by_id(s.base, &s.q, info.eye_link);
-        let torso_rot = match torso_link {
+        let torso_rot = match head_parent {
             Some(l) => model.link_pose_by_id(s.base, &s.q, l).rotation,
             None => s.base.rotation,
         };
