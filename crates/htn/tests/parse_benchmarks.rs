@@ -164,7 +164,7 @@ fn a_reversed_ordering_in_a_benchmark_is_followed() {
     );
 }
 
-/// Every HDDL file the project ships (`domains/`) parses, each problem with the domain of its
+/// Every HDDL file the project ships (`domains/`) parses, each problem with every domain of its
 /// folder, and with no warning.
 #[test]
 fn every_shipped_file_parses_without_warnings() {
@@ -177,8 +177,14 @@ fn every_shipped_file_parses_without_warnings() {
             assert!(d.warnings.is_empty(), "{:?}", d.warnings);
             continue;
         }
-        for d in ["domain.hddl", "domain-compound.hddl"] {
-            let d = load_domain(f.with_file_name(d)).unwrap_or_else(|e| panic!("{e}"));
+        // Each domain file of the problem's folder (the library has two).
+        let domains: Vec<_> = files
+            .iter()
+            .filter(|d| is_domain_file_name(d) && d.parent() == f.parent())
+            .collect();
+        assert!(!domains.is_empty(), "no domain beside {}", f.display());
+        for d in domains {
+            let d = load_domain(d).unwrap_or_else(|e| panic!("{e}"));
             load_problem(f, &d).unwrap_or_else(|e| panic!("{e}"));
         }
     }
