@@ -806,3 +806,51 @@ fn malformed_joint_trajectory_is_bad_input() {
     jt.as_object_mut().unwrap().remove("velocity_limits");
     assert!(bad(jt).contains("missing key"));
 }
+
+/// The grasping links are the plan's declared `hands`, not names: the palm 5 mm into the book it
+/// lifts is allowed while the palm is in a declared hand, a collision once no hand lists it.
+#[test]
+fn grasping_links_are_the_declared_hands() {
+    let lift = |hands: serde_json::Value| {
+        let mut plan = scene();
+        plan["scene"]["agents"][0]["hands"] = hands;
+        let frames = [0.77, 0.82]
+            .iter()
+            .map(|&z| posture(BOT, &[("r_gripper_palm_link", [1.0, -0.2, z + 0.045])]))
+            .collect();
+        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+        let traj = trajectory("bot", "lift", frames, Some(("book", held)));
+        let after = json!({ "book": at(1.0, -0.2, 0.82) });
+        push_step(
+            &mut plan,
+            "pick",
+            "book",
+            vec![traj],
+            json!([]),
+            json!([]),
+            after,
+        );
+        plan
+    };
+    let palm = json!([{ "tool_link": "r_gripper_palm_link", "links": ["r_gripper_palm_link"] }]);
+    let r = check(&lift(palm));
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    let r = check(&lift(json!([])));
+    assert!(
+        kinds(&r)
+            .iter()
+            .any(|(k, a, _)| *k == FaultKind::Collision && a == "bot/r_gripper_palm_link"),
+        "{:#?}",
+        kinds(&r)
+    );
+    // A hand naming a link the agent lacks is bad input, with its path.
+    let bad = json!([{ "tool_link": "r_gripper_palm_link", "links": ["wing"] }]);
+    let err = check::parse_plan(&lift(bad).to_string(), "p.json")
+        .err()
+        .expect("an error")
+        .to_string();
+    assert!(
+        err.contains("agents[0].hands[0].links[0]") && err.contains("no link `wing`"),
+        "{err}"
+    );
+}

@@ -89,3 +89,57 @@ fn malformed_xml_and_another_robot_are_errors() {
     let e = error("<robot name=\"fetch\"/>");
     assert!(e.contains("describes `fetch`"), "{e}");
 }
+
+#[test]
+fn the_fetch_has_one_arm_a_gripper_a_head_and_a_tucked_posture() {
+    let fetch = AgentModel::from_urdf_file(models("fetch.urdf")).unwrap();
+    assert_eq!(fetch.arm_names(), ["arm"]);
+    let arm = fetch.chain("arm").unwrap();
+    assert_eq!(arm.dofs.len(), 7, "a 7-DOF arm");
+    let ee = fetch.semantics().end_effector("arm").unwrap();
+    assert_eq!(ee.group, "gripper");
+    assert_eq!(ee.parent_link, fetch.links()[arm.tip_link].name);
+    let head = fetch.chain("head").unwrap();
+    assert_eq!(head.dofs.len(), 2, "pan and tilt");
+    let lift = fetch.group_dof("torso_lift").unwrap();
+    assert!((fetch.dof_limits()[lift].upper - 0.386).abs() < 1e-6);
+    // The hand: the palm and both fingers (and the tool frame) may touch what it holds.
+    assert_eq!(fetch.hand_links(arm.tip_link).len(), 4);
+    // The tucked posture sets the arm's seven joints, each within its limits.
+    let tucked = fetch.posture("tucked");
+    assert_eq!(tucked.len(), 7);
+    assert!(
+        tucked
+            .iter()
+            .all(|&(d, v)| arm.dofs.contains(&d) && fetch.dof_limits()[d].contains(v))
+    );
+}
+
+#[test]
+fn the_fetch_tucked_posture_is_free_of_self_collision() {
+    use geometry::collision::{
+        CollisionChecker, SelfCollisionModel, SelfCollisionOptions, StaticObstacles,
+    };
+    use std::sync::Arc;
+    let fetch = Arc::new(AgentModel::from_urdf_file(models("fetch.urdf")).unwrap());
+    let model = Arc::new(SelfCollisionModel::new(
+        fetch.clone(),
+        &SelfCollisionOptions::default(),
+    ));
+    let checker = CollisionChecker::new(
+        model,
+        Arc::new(StaticObstacles::empty()),
+        parry3d::math::Pose::IDENTITY,
+    );
+    let mut q = fetch.default_configuration().into_vec();
+    for (d, v) in fetch.posture("tucked") {
+        q[d] = v;
+    }
+    // With the torso raised as the library scenes have it (lowered fully, the folded elbow
+    // meets the base).
+    for lift in [0.25, 0.3, 0.386] {
+        q[fetch.group_dof("torso_lift").unwrap()] = lift;
+        let hit = checker.first_collision(&q);
+        assert!(hit.is_none(), "lift {lift}: {hit:?}");
+    }
+}
