@@ -1,5 +1,5 @@
 //! Shapes placed in the world, the depth query, and the body naming and grouping rules that
-//! depend only on the JSON (which links grasp, which link pairs are adjacent).
+//! depend only on the JSON (which hand holds an object, which link pairs are adjacent).
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose;
@@ -20,7 +20,7 @@ pub enum Owner {
 }
 
 impl Owner {
-    /// The report's name: `pr2/r_forearm_link`, `object desk`, `held white-book`.
+    /// The report's name: `AGENT/LINK`, `object desk`, `held white-book`.
     pub fn name(self, plan: &Plan) -> String {
         match self {
             Owner::Link(a, l) => {
@@ -106,33 +106,25 @@ pub fn links_at(plan: &Plan, a: usize, link_poses: &[Pose]) -> Vec<Placed> {
     out
 }
 
-/// Links that may touch what they grasp: names with `gripper`, `finger`, `palm` or `hand`.
-pub fn is_grasping_link(name: &str) -> bool {
-    ["gripper", "finger", "palm", "hand"]
-        .iter()
-        .any(|w| name.contains(w))
-}
-
-/// The side prefix of a link name (`r` of `r_gripper_palm_link`), if it has one.
-fn side(name: &str) -> Option<&str> {
-    name.split_once('_').map(|(s, _)| s)
-}
-
-/// The grasping links of the hand that holds an object posed at `held`: the grasping link whose
-/// origin is nearest the object, and every grasping link with the same side prefix.
-/// Returns (the nearest link, the hand's links).
+/// The hand that holds an object posed at `held`: among the links of the agent's declared
+/// `hands`, the one whose origin is nearest the object, and every link of the hands it belongs
+/// to. Returns (the nearest link, the hand's links); `None` when the agent declares no hand.
 pub fn hand_of(agent: &Agent, link_poses: &[Pose], held: &Pose) -> Option<(usize, Vec<usize>)> {
-    let grasping = |l: &usize| is_grasping_link(&agent.links[*l].name);
-    let near = (0..agent.links.len()).filter(grasping).min_by(|&i, &j| {
-        let di = link_poses[i].translation.distance(held.translation);
-        let dj = link_poses[j].translation.distance(held.translation);
-        di.total_cmp(&dj)
-    })?;
-    let s = side(&agent.links[near].name);
-    let hand = (0..agent.links.len())
-        .filter(grasping)
-        .filter(|&l| s.is_none() || side(&agent.links[l].name) == s)
+    let near = (0..agent.links.len())
+        .filter(|&l| agent.is_grasping(l))
+        .min_by(|&i, &j| {
+            let di = link_poses[i].translation.distance(held.translation);
+            let dj = link_poses[j].translation.distance(held.translation);
+            di.total_cmp(&dj)
+        })?;
+    let mut hand: Vec<usize> = agent
+        .hands
+        .iter()
+        .filter(|h| h.links.contains(&near))
+        .flat_map(|h| h.links.iter().copied())
         .collect();
+    hand.sort_unstable();
+    hand.dedup();
     Some((near, hand))
 }
 

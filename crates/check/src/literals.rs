@@ -8,7 +8,7 @@
 use parry3d::math::{Pose, Vector};
 use parry3d::query::{Ray, RayCast};
 
-use crate::bodies::{Owner, Placed, is_grasping_link, links_at, objects_at};
+use crate::bodies::{Owner, Placed, links_at, objects_at};
 use crate::model::{AgentKind, Literal, Plan, Step};
 use crate::report::{Fault, FaultKind};
 use crate::world::World;
@@ -113,9 +113,7 @@ fn visible(
     };
     let scene = Scene::new(plan, world, o, a, eye.translation);
     let now = scene.fraction(&Camera::of(&eye), Some(fov));
-    let pivot = (0..agent.links.len())
-        .find(|&l| agent.links[l].name.contains("head_pan"))
-        .map(|l| world.agents[a][l].translation);
+    let pivot = agent.head_pivot.map(|l| world.agents[a][l].translation);
     let aimed = scene.fraction(&Camera::aimed(&eye, pivot, scene.centre()), None);
     let detail = format!(
         "visible fraction {now:.2} with the head as it is, {aimed:.2} with it turned (threshold {VISIBLE})"
@@ -128,7 +126,7 @@ fn visible(
     Some((stale, detail))
 }
 
-/// (stale, what was measured); `None` when the agent has no link named `*shoulder*`.
+/// (stale, what was measured); `None` when the agent declares no `shoulder_links`.
 fn reachable(
     plan: &Plan,
     world: &World,
@@ -147,13 +145,14 @@ fn reachable(
         d.fold(f32::INFINITY, f32::min)
     };
     let hand = (0..agent.links.len())
-        .filter(|&l| is_grasping_link(&agent.links[l].name))
+        .filter(|&l| agent.is_grasping(l))
         .map(|l| dist(poses[l].translation))
         .fold(f32::INFINITY, f32::min);
     let held = world.holds[o].as_ref().is_some_and(|h| h.agent == a);
-    let shoulder = (0..agent.links.len())
-        .filter(|&l| agent.links[l].name.contains("shoulder"))
-        .map(|l| dist(poses[l].translation))
+    let shoulder = agent
+        .shoulders
+        .iter()
+        .map(|&l| dist(poses[l].translation))
         .fold(f32::INFINITY, f32::min);
     if !shoulder.is_finite() {
         return None;
@@ -195,7 +194,7 @@ impl Camera {
     }
 
     /// The eye turned (pan about z, then tilt) to look at `target`, upright. With a `pivot`
-    /// (the head pan link's origin) the eye swings about it as a head does; the eye's offset from
+    /// (the `head_pivot_link`'s origin) the eye swings about it as a head does; the eye's offset from
     /// the pivot is kept in the eye's frame. Without one it turns on the spot.
     fn aimed(eye: &Pose, pivot: Option<Vector>, target: Vector) -> Self {
         let offset = pivot.map(|p| eye.rotation.inverse() * (eye.translation - p));

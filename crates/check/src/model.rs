@@ -35,6 +35,16 @@ pub struct Link {
     pub parts: Vec<Part>,
 }
 
+/// A hand or gripper as the plan declares it (`hands`): the frame a held object rides in and
+/// the links that may touch what it grasps.
+#[derive(Clone, Debug)]
+pub struct Hand {
+    /// Index of the `tool_link`.
+    pub tool: usize,
+    /// Indices of its `links` (palm, fingers, the tool frame).
+    pub links: Vec<usize>,
+}
+
 /// An agent: its links and its initial posture (`link_poses`, one pose per link).
 #[derive(Clone)]
 pub struct Agent {
@@ -42,6 +52,12 @@ pub struct Agent {
     pub kind: AgentKind,
     /// Index of the `eye_link`, when declared.
     pub eye: Option<usize>,
+    /// Index of the `head_pivot_link` (the eye swings about its origin when the head turns).
+    pub head_pivot: Option<usize>,
+    /// Indices of the `shoulder_links` (reach is measured from their origins).
+    pub shoulders: Vec<usize>,
+    /// Its `hands` (none declared: no link may grasp).
+    pub hands: Vec<Hand>,
     pub links: Vec<Link>,
     pub link_poses: Vec<Pose>,
     /// The agent's kinematics, read from the `urdf` text when the file carries it.
@@ -151,5 +167,10 @@ impl Agent {
     /// Index of the link called `name`.
     pub fn link(&self, name: &str) -> Option<usize> {
         self.links.iter().position(|l| l.name == name)
+    }
+
+    /// Whether link `l` belongs to one of the agent's hands: it may touch what it grasps.
+    pub fn is_grasping(&self, l: usize) -> bool {
+        self.hands.iter().any(|h| h.links.contains(&l))
     }
 }

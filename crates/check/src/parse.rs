@@ -8,7 +8,7 @@ use serde_json::Value;
 use crate::error::InputError;
 use crate::kinematics::Kinematics;
 use crate::model::{
-    Agent, AgentKind, Frame, JointPoint, JointTrajectory, Link, Object, Part, Plan, Step,
+    Agent, AgentKind, Frame, Hand, JointPoint, JointTrajectory, Link, Object, Part, Plan, Step,
     Trajectory,
 };
 
@@ -273,6 +273,9 @@ fn agent(n: Node) -> Res<Agent> {
         name,
         kind,
         eye: None,
+        head_pivot: None,
+        shoulders: Vec::new(),
+        hands: Vec::new(),
         links,
         link_poses: Vec::new(),
         kinematics: None,
@@ -294,8 +297,29 @@ fn agent(n: Node) -> Res<Agent> {
             InputError::bad(&join(n.path, "eye_link"), format!("no link `{eye}`"))
         })?);
     }
+    a.head_pivot = n.opt("head_pivot_link", |n| link_index(n, &a))?;
+    a.shoulders = n
+        .opt("shoulder_links", |n| n.array(|n| link_index(n, &a)))?
+        .unwrap_or_default();
+    a.hands = n
+        .opt("hands", |n| {
+            n.array(|h| {
+                Ok(Hand {
+                    tool: h.get("tool_link", |n| link_index(n, &a))?,
+                    links: h.get("links", |n| n.array(|n| link_index(n, &a)))?,
+                })
+            })
+        })?
+        .unwrap_or_default();
     a.link_poses = n.get("link_poses", |n| link_poses(n, &a))?;
     Ok(a)
+}
+
+/// The index of the link `n` names in agent `a`.
+fn link_index(n: Node, a: &Agent) -> Res<usize> {
+    let name = n.str()?;
+    a.link(&name)
+        .ok_or_else(|| InputError::bad(n.path, format!("no link `{name}`")))
 }
 
 /// A complete set of link poses, in the agent's link order.

@@ -63,7 +63,7 @@ pub struct Fault {
     pub trajectory_index: Option<usize>,
     /// Frame of the worst configuration, `12+0.50` for a sub-frame.
     pub frame: Option<String>,
-    /// The two bodies (`pr2/r_forearm_link`, `object desk`, `held white-book`), or the literal
+    /// The two bodies (`AGENT/LINK`, `object desk`, `held white-book`), or the literal
     /// and `added` / `deleted` for a stale literal.
     pub a: String,
     pub b: String,

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::Pose;
 
-use crate::bodies::{Adjacency, Owner, Placed, depth, is_grasping_link, links_at, objects_at};
+use crate::bodies::{Adjacency, Owner, Placed, depth, links_at, objects_at};
 use crate::model::{Plan, Step, Trajectory};
 use crate::report::{Fault, FaultKind};
 use crate::world::World;
@@ -204,7 +204,7 @@ impl Sweep<'_> {
                 let hold = world.holds[o].as_ref();
                 let in_hand = hold.is_some_and(|h| h.agent == b && h.hand.contains(&l));
                 let free = hold.is_none_or(|h| h.agent != b);
-                let grasping = is_grasping_link(&plan.agents[b].links[l].name);
+                let grasping = plan.agents[b].is_grasping(l);
                 let grasp = in_hand || (self.step.target == Some(o) && grasping && free);
                 Some(if grasp {
                     Tolerance::Grasp

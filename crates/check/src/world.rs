@@ -9,9 +9,9 @@ use crate::model::Plan;
 #[derive(Clone, Debug)]
 pub struct Hold {
     pub agent: usize,
-    /// The grasping link nearest the object when the hold began; the object rides with it.
+    /// The hand link nearest the object when the hold began; the object rides with it.
     pub link: usize,
-    /// The hand's links (same side prefix), which may touch the object.
+    /// The links of the hand it is in (its declared `hands` entry), which may touch the object.
     pub hand: Vec<usize>,
 }
 

@@ -749,6 +749,16 @@ impl AgentModel {
         None
     }
 
+    /// The links an object held at `tool` may touch: the nearest link with geometry at or above
+    /// `tool` (the palm of a gripper, a person's hand) and all its descendants (the fingers), in
+    /// link order. The collision checker leaves exactly these out for a held object.
+    pub fn hand_links(&self, tool: usize) -> Vec<usize> {
+        let hand = self.geometric_ancestor(tool).unwrap_or(tool);
+        (0..self.links.len())
+            .filter(|&l| self.is_descendant(l, hand))
+            .collect()
+    }
+
     /// The serial chain of the SRDF group called `name` (an arm such as `right_arm`, or
     /// `head`), from its `base_link` to its `tip_link`.
     pub fn chain(&self, name: &str) -> Result<KinematicChain, ModelError> {

@@ -235,10 +235,9 @@ impl fmt::Debug for HeldObject {
 }
 
 impl HeldObject {
-    /// An object attached to link `link_name` (for example `r_gripper_tool_frame` or `r_hand`)
-    /// at pose `grasp` in that link's frame. It is not checked against the hand holding it: the
-    /// nearest link with geometry at or above `link_name` (the palm) and all that link's
-    /// descendants (the fingers).
+    /// An object attached to link `link_name` (a gripper's tool frame or a person's hand frame)
+    /// at pose `grasp` in that link's frame. It is not checked against the hand holding it:
+    /// [`AgentModel::hand_links`] of `link_name` (the palm and the fingers).
     pub fn new(
         model: &AgentModel,
         name: &str,
@@ -247,9 +246,9 @@ impl HeldObject {
         grasp: Pose,
     ) -> Result<HeldObject, ModelError> {
         let link = model.link_id(link_name)?;
-        let hand = model.geometric_ancestor(link).unwrap_or(link);
+        let hand = model.hand_links(link);
         let touching = (0..model.links().len())
-            .map(|l| model.is_descendant(l, hand))
+            .map(|l| hand.contains(&l))
             .collect();
         let radius = shape.compute_local_bounding_sphere();
         let radius = radius.center.length() + radius.radius;

@@ -4,7 +4,8 @@
 //!   [`FactParams::vis_threshold`] of object `o`'s pixels ([`crate::visibility`]): level 0 with the
 //!   head as it is, level 1 with the head turned towards the object, levels 2 to 4 from every
 //!   stance the level allows ([`crate::effort::stances`]), the head turned towards the object.
-//! * `reachable(o, a)` with the least effort level: 0 when a hand of `a` holds or touches `o`;
+//! * `reachable(o, a)` with the least effort level: 0 when a hand of `a` holds or touches `o`
+//!   (within [`crate::perception::HAND_TOLERANCE`] of its surface);
 //!   from level 1, when some shoulder of a stance of that level is within the agent's arm reach of
 //!   the object's surface (exact point-to-shape distance), confirmed by inverse kinematics of an
 //!   arm (the hand frame on the object's nearest surface point, joint limits respected).
@@ -26,6 +27,7 @@ use serde::Serialize;
 use crate::agent::KinematicChain;
 use crate::effort::{MAX_EFFORT, aim_head, shoulders, stances};
 use crate::ik::{IkOptions, solve_ik};
+use crate::perception::{HAND_TOLERANCE, hand_positions, reach_postures};
 use crate::scene::{AgentId, AgentKind, ObjectId};
 use crate::visibility::{Aim, visibility_for_agent, visibility_from};
 use crate::world::World;
@@ -41,8 +43,6 @@ pub struct FactParams {
     pub on_tolerance: f32,
     /// Level-4 stances tried per object, nearest to the object first.
     pub max_move_stances: usize,
-    /// Distance from a hand frame within which an object counts as in the hand (level 0).
-    pub hand_tolerance: f32,
     /// Confirm reach with inverse kinematics of an arm (position of the hand frame at the
     /// object's point nearest the arm's root; seeded, a few restarts), not only the reach radius.
     pub confirm_with_ik: bool,
@@ -58,7 +58,6 @@ impl Default for FactParams {
             resolution: 64,
             on_tolerance: 0.05,
             max_move_stances: 40,
-            hand_tolerance: 0.03,
             confirm_with_ik: true,
             max_effort: MAX_EFFORT,
         }
@@ -147,11 +146,9 @@ pub fn reachable_effort(
     if world.attachment(object).is_some_and(|a| a.agent == agent) {
         return Some(0);
     }
-    let poses = world.agent_state(agent).link_poses();
-    if info
-        .hand_links
-        .iter()
-        .any(|&h| distance_to_object(world, object, poses[h].translation) <= params.hand_tolerance)
+    if hand_positions(world, agent)
+        .into_iter()
+        .any(|h| distance_to_object(world, object, h) <= HAND_TOLERANCE)
     {
         return Some(0);
     }
@@ -163,8 +160,7 @@ pub fn reachable_effort(
             list.truncate(params.max_move_stances);
         }
         for s in &list {
-            let lean_variants = lean_variants(world, agent, s);
-            for q in lean_variants {
+            for q in reach_postures(world, agent, s) {
                 let near = shoulders(world, agent, s.base, &q)
                     .into_iter()
                     .any(|p| distance_to_object(world, object, p) <= info.reach);
@@ -226,19 +222,6 @@ pub fn arm_reach(
     )
     .ok()
     .map(|s| s.configuration)
-}
-
-/// Level-4 stances stand upright; reaching from them may also lean forward.
-fn lean_variants(world: &World, agent: AgentId, s: &crate::effort::Stance) -> Vec<Vec<f32>> {
-    let mut out = vec![s.q.clone()];
-    if s.level == MAX_EFFORT
-        && let Some(r) = world.agent(agent).effort.torso_pitch
-    {
-        let mut q = s.q.clone();
-        q[r.dof] = r.upper;
-        out.push(q);
-    }
-    out
 }
 
 /// Centre of an object's world bounding box.

@@ -8,6 +8,7 @@ pub mod ik;
 pub mod kinematics;
 pub mod mesh_file;
 pub mod mightability;
+pub mod perception;
 pub mod render;
 pub mod scene;
 pub mod visibility;

@@ -12,7 +12,7 @@
 //!   marched through an occupancy grid (3D DDA) until they reach an occupied cell, which is seen
 //!   itself. The occupancy grid holds the objects and the other agents (an agent does not hide
 //!   the world from itself here; the exact pixel test does that).
-//! * **Reach**: level 0 the cells at the hands; from level 1 the cells within the agent's arm
+//! * **Reach**: level 0 the cells at the hands ([`crate::perception::hand_at`]); from level 1 the cells within the agent's arm
 //!   reach of a shoulder of some stance of that level (level 4: standing at each free base
 //!   position, facing 8 directions, upright and leaning).
 //!
@@ -30,7 +30,8 @@ use parry3d::query::intersection_test;
 use parry3d::shape::Cuboid;
 use rayon::prelude::*;
 
-use crate::effort::{JointRange, MAX_EFFORT, stances};
+use crate::effort::{JointRange, MAX_EFFORT, Stance, stances};
+use crate::perception;
 use crate::scene::{AgentId, ObjectId};
 use crate::world::{BodyOwner, Precision, World, WorldModel};
 
@@ -568,118 +569,131 @@ fn agent_maps(
     occ: &BitGrid,
     params: &MightabilityParams,
 ) -> AgentMaps {
-    let info = world.agent(agent);
-    let model = &info.model;
-    let eff = &info.effort;
-    let step = params.ray_step_deg.to_radians();
-    let mstep = params.move_ray_step_deg.to_radians();
-    let bstep = params.body_ray_step_deg.to_radians();
-    // The frame the head turns in: the parent link of the head-pan joint (else the base).
-    let torso_link = eff
-        .head_pan
-        .map(|r| model.joints()[model.dof_joint(r.dof)].parent);
-    let torso_rot = |base: Pose, q: &[f32]| match torso_link {
-        Some(l) => model.link_pose_by_id(base, q, l).rotation,
-        None => base.rotation,
-    };
-    let eye_at = |base: Pose, q: &[f32]| model.link_pose_by_id(base, q, info.eye_link);
-
-    // ---- eyes per level ----
     let mut eyes: Vec<Vec<Eye>> = vec![Vec::new(); MAX_EFFORT as usize + 1];
-    let st = world.agent_state(agent);
+    eyes[0].push(current_eye(world, agent, params));
+    let mut origins: Vec<Vec<Vector>> = vec![Vec::new(); MAX_EFFORT as usize + 1];
+    for level in 1..=MAX_EFFORT {
+        let list = level_stances(world, agent, level, params);
+        eyes[level as usize] = stance_eyes(world, agent, level, &list, params);
+        origins[level as usize] = list
+            .iter()
+            .flat_map(|s| turned_reach_origins(world, agent, s))
+            .collect();
+    }
+    AgentMaps {
+        agent,
+        vis: vis_levels(grid, occ, &eyes),
+        reach: reach_levels(world, agent, grid, origins),
+    }
+}
+
+/// The eye as it is now, seeing its field of view (level 0).
+fn current_eye(world: &World, agent: AgentId, params: &MightabilityParams) -> Eye {
     let e0 = world.eye_pose(agent);
-    eyes[0].push(Eye {
+    Eye {
         pos: e0.translation,
         dirs: Directions::Frustum {
             rot: e0.rotation,
-            fov: info.fov,
+            fov: world.agent(agent).fov,
         },
-        step,
-    });
-    let mut reach_pts: Vec<Vec<Vector>> = vec![Vec::new(); MAX_EFFORT as usize + 1];
-    let poses = st.link_poses();
-    let hands: Vec<Vector> = info
-        .hand_links
-        .iter()
-        .map(|&h| poses[h].translation)
-        .collect();
-    for level in 1..=MAX_EFFORT {
-        let list = stances(world, agent, level, None);
-        let list: Vec<_> = if level == MAX_EFFORT {
-            // Thin the base positions to every move_stride-th grid point.
-            let here = st.base.translation;
-            let s = eff.move_step * params.move_stride as f32;
-            list.into_iter()
-                .filter(|x| {
-                    let d = (x.base.translation - here) / s;
-                    (d.x - d.x.round()).abs() < 1e-3 && (d.y - d.y.round()).abs() < 1e-3
-                })
-                .collect()
-        } else {
-            list
+        step: params.ray_step_deg.to_radians(),
+    }
+}
+
+/// The stances of `level`; at the highest level the base positions thinned to every
+/// `move_stride`-th grid point.
+fn level_stances(
+    world: &World,
+    agent: AgentId,
+    level: u8,
+    params: &MightabilityParams,
+) -> Vec<Stance> {
+    let list = stances(world, agent, level, None);
+    if level != MAX_EFFORT {
+        return list;
+    }
+    let here = world.agent_state(agent).base.translation;
+    let s = world.agent(agent).effort.move_step * params.move_stride as f32;
+    list.into_iter()
+        .filter(|x| {
+            let d = (x.base.translation - here) / s;
+            (d.x - d.x.round()).abs() < 1e-3 && (d.y - d.y.round()).abs() < 1e-3
+        })
+        .collect()
+}
+
+/// One eye per stance of `level`, turning the head through its range; eyes within
+/// `eye_merge` of each other share one ray fan over the union of their ranges.
+fn stance_eyes(
+    world: &World,
+    agent: AgentId,
+    level: u8,
+    list: &[Stance],
+    params: &MightabilityParams,
+) -> Vec<Eye> {
+    let info = world.agent(agent);
+    let (model, eff) = (&info.model, &info.effort);
+    // The frame the head turns in: the parent link of the head-pan joint (else the base).
+    let head_parent = eff
+        .head_pan
+        .map(|r| model.joints()[model.dof_joint(r.dof)].parent);
+    let step = match level {
+        1 => params.ray_step_deg,
+        MAX_EFFORT => params.move_ray_step_deg,
+        _ => params.body_ray_step_deg,
+    }
+    .to_radians();
+    let merge = params.eye_merge;
+    let mut keys: HashMap<(i64, i64, i64), usize> = HashMap::new();
+    let mut out: Vec<Eye> = Vec::new();
+    for s in list {
+        let eye = model.link_pose_by_id(s.base, &s.q, info.eye_link);
+        let torso_rot = match head_parent {
+            Some(l) => model.link_pose_by_id(s.base, &s.q, l).rotation,
+            None => s.base.rotation,
         };
-        // Eyes within `merge` of each other share one ray fan over the union of their ranges.
-        let merge = params.eye_merge;
-        let mut keys: HashMap<(i64, i64, i64), usize> = HashMap::new();
-        for s in &list {
-            let eye = eye_at(s.base, &s.q);
-            let full = level == MAX_EFFORT;
-            let dirs = head_range(
-                torso_rot(s.base, &s.q),
-                eff.head_pan,
-                eff.head_tilt,
-                info.fov,
-                full,
-            );
-            let key = (
-                (eye.translation.x / merge).round() as i64,
-                (eye.translation.y / merge).round() as i64,
-                (eye.translation.z / merge).round() as i64,
-            );
-            let bucket = &mut eyes[level as usize];
-            match keys.get(&key) {
-                Some(&k) => bucket[k].dirs = union(bucket[k].dirs, dirs),
-                None => {
-                    keys.insert(key, bucket.len());
-                    bucket.push(Eye {
-                        pos: eye.translation,
-                        dirs,
-                        step: match level {
-                            1 => step,
-                            MAX_EFFORT => mstep,
-                            _ => bstep,
-                        },
-                    });
-                }
-            }
-            // Reach: shoulders of the stance; at level 4 also turned (8 ways) and leaning.
-            let mut qs = vec![s.q.clone()];
-            if level == MAX_EFFORT
-                && let Some(r) = eff.torso_pitch
-            {
-                let mut q = s.q.clone();
-                q[r.dof] = r.upper;
-                qs.push(q);
-            }
-            let turns = if level == MAX_EFFORT { 8 } else { 1 };
-            for t in 0..turns {
-                let base = s.base
-                    * Pose::from_rotation(Rotation::from_rotation_z(
-                        t as f32 * std::f32::consts::TAU / turns as f32,
-                    ));
-                for q in &qs {
-                    for &l in &info.shoulder_links {
-                        reach_pts[level as usize]
-                            .push(model.link_pose_by_id(base, q, l).translation);
-                    }
-                }
+        let full = level == MAX_EFFORT;
+        let dirs = head_range(torso_rot, eff.head_pan, eff.head_tilt, info.fov, full);
+        let key = (
+            (eye.translation.x / merge).round() as i64,
+            (eye.translation.y / merge).round() as i64,
+            (eye.translation.z / merge).round() as i64,
+        );
+        match keys.get(&key) {
+            Some(&k) => out[k].dirs = union(out[k].dirs, dirs),
+            None => {
+                keys.insert(key, out.len());
+                out.push(Eye {
+                    pos: eye.translation,
+                    dirs,
+                    step,
+                });
             }
         }
     }
+    out
+}
 
-    // ---- visibility ----
-    // All eyes of all levels in one parallel pass, one set of seen cells per level.
-    let levels = MAX_EFFORT as usize + 1;
+/// The points a stance's arms reach from ([`perception::reach_origins`]); a standing stance
+/// (the highest level) also turned 8 ways, since the grid serves every direction at once.
+fn turned_reach_origins(world: &World, agent: AgentId, s: &Stance) -> Vec<Vector> {
+    let turns = if s.level == MAX_EFFORT { 8 } else { 1 };
+    (0..turns)
+        .flat_map(|t| {
+            let yaw = t as f32 * std::f32::consts::TAU / turns as f32;
+            let turned = Stance {
+                base: s.base * Pose::from_rotation(Rotation::from_rotation_z(yaw)),
+                ..s.clone()
+            };
+            perception::reach_origins(world, agent, &turned)
+        })
+        .collect()
+}
+
+/// Least level at which each cell is seen: all eyes of all levels in one parallel pass, one
+/// set of seen cells per level (levels are cumulative).
+fn vis_levels(grid: &Grid, occ: &BitGrid, eyes: &[Vec<Eye>]) -> Vec<u8> {
+    let levels = eyes.len();
     let tagged: Vec<(usize, &Eye)> = eyes
         .iter()
         .enumerate()
@@ -698,34 +712,39 @@ fn agent_maps(
             || vec![BitGrid::new(grid.len()); levels],
             |a, b| a.into_iter().zip(&b).map(|(x, y)| x.or(y)).collect(),
         );
-    // A cell keeps the least level that sees it: levels are cumulative.
-    let mut vis = vec![NONE; grid.len()];
-    for (level, bits) in seen.iter().enumerate() {
-        for (i, v) in vis.iter_mut().enumerate() {
-            if *v == NONE && bits.get(i) {
-                *v = level as u8;
-            }
-        }
-    }
+    least_levels(grid.len(), seen.iter())
+}
 
-    // ---- reach ----
-    let mut reach = vec![NONE; grid.len()];
-    let r0 = mark_spheres(grid, &hands, 0.5 * grid.cell * 3f32.sqrt());
-    for (i, v) in reach.iter_mut().enumerate() {
-        if r0.get(i) {
-            *v = 0;
-        }
-    }
-    for (level, pts) in reach_pts.into_iter().enumerate().skip(1) {
+/// Least level at which each cell is reached: level 0 the cells a hand is at
+/// ([`perception::hand_at`] with the cell's half-diagonal as extent); from level 1 the cells
+/// within the agent's arm reach of the level's reach origins.
+fn reach_levels(world: &World, agent: AgentId, grid: &Grid, origins: Vec<Vec<Vector>>) -> Vec<u8> {
+    let half_diagonal = 0.5 * grid.cell * 3f32.sqrt();
+    let hands = perception::hand_positions(world, agent);
+    let mut bits = vec![mark_spheres(
+        grid,
+        &hands,
+        perception::HAND_TOLERANCE + half_diagonal,
+    )];
+    let reach = world.agent(agent).reach;
+    for pts in origins.into_iter().skip(1) {
         let pts = dedup_points(pts, 0.5 * grid.cell);
-        let bits = mark_spheres(grid, &pts, info.reach);
-        for (i, v) in reach.iter_mut().enumerate() {
+        bits.push(mark_spheres(grid, &pts, reach));
+    }
+    least_levels(grid.len(), bits.iter())
+}
+
+/// Per cell, the index of the first bit grid that holds it ([`NONE`]: none does).
+fn least_levels<'a>(n: usize, per_level: impl Iterator<Item = &'a BitGrid>) -> Vec<u8> {
+    let mut out = vec![NONE; n];
+    for (level, bits) in per_level.enumerate() {
+        for (i, v) in out.iter_mut().enumerate() {
             if *v == NONE && bits.get(i) {
                 *v = level as u8;
             }
         }
     }
-    AgentMaps { agent, vis, reach }
+    out
 }
 
 type CacheEntry = (Weak<WorldModel>, u64, MightabilityParams, Arc<Mightability>);

@@ -46,6 +46,13 @@ pub struct AgentInfo {
 }
 
 impl AgentInfo {
+    /// The link the head turns about: the child of the first movable joint of the SRDF's `head`
+    /// chain (the pan joint); `None` without one. A viewer's eye swings about its origin.
+    pub fn head_pivot_link(&self) -> Option<usize> {
+        let pan = self.effort.head_pan?;
+        Some(self.model.joints()[self.model.dof_joint(pan.dof)].child)
+    }
+
     /// Name of the agent.
     pub fn name(&self) -> &str {
         &self.spec.name

@@ -1,6 +1,6 @@
 //! The PR2 parallel gripper as collision boxes in its tool frame.
 //!
-//! Convention (as the PR2's `r_gripper_tool_frame`): x points forward out of the palm (the
+//! Convention (a gripper tool frame as ROS robots define it): x points forward out of the palm (the
 //! approach direction), y is the axis along which the two fingers close, z completes the frame.
 //! The tool frame sits between the fingertips, 0.18 m ahead of the palm frame
 //! (`../shared/notes/geometry-facts.md` beside the checkout, section 1).

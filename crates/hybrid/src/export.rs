@@ -116,10 +116,23 @@ pub fn scene_json(world: &World) -> Value {
                     json!({ "name": l.name, "shapes": shapes })
                 })
                 .collect();
+            let name = |l: usize| model.links()[l].name.clone();
+            // What the SRDF says the links are for, so that a checker needs no link names.
+            let hands: Vec<Value> = a
+                .hand_links
+                .iter()
+                .map(|&h| {
+                    let touching: Vec<String> = model.hand_links(h).into_iter().map(name).collect();
+                    json!({ "tool_link": name(h), "links": touching })
+                })
+                .collect();
             json!({
                 "name": a.name(),
                 "kind": a.kind().to_string(),
                 "eye_link": model.links().get(a.eye_link).map(|l| l.name.clone()),
+                "head_pivot_link": a.head_pivot_link().map(name),
+                "shoulder_links": a.shoulder_links.iter().map(|&l| name(l)).collect::<Vec<_>>(),
+                "hands": hands,
                 "links": links,
                 "link_poses": link_poses_json(world, id, world.agent_state(id).link_poses()),
                 "urdf": model.urdf(),

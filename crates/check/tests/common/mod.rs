@@ -91,7 +91,30 @@ pub fn posture(links: &[LinkSpec], moved: &[(&str, [f32; 3])]) -> Value {
     Value::Object(m)
 }
 
-fn agent(name: &str, kind: &str, eye: &str, links: &[LinkSpec]) -> Value {
+/// What an agent's links are for, as the planner exports it from the SRDF: its shoulders and
+/// its hands (`(tool link, links)` each).
+struct Roles {
+    shoulders: &'static [&'static str],
+    hands: &'static [(&'static str, &'static [&'static str])],
+}
+
+const BOT_ROLES: Roles = Roles {
+    shoulders: &["r_shoulder_pan_link"],
+    hands: &[
+        (
+            "r_gripper_palm_link",
+            &["r_gripper_palm_link", "r_gripper_l_finger_link"],
+        ),
+        ("l_gripper_palm_link", &["l_gripper_palm_link"]),
+    ],
+};
+
+const MEMBER_ROLES: Roles = Roles {
+    shoulders: &["r_shoulder_pitch_link"],
+    hands: &[("r_hand_link", &["r_hand_link"])],
+};
+
+fn agent(name: &str, kind: &str, eye: &str, links: &[LinkSpec], roles: &Roles) -> Value {
     let ls: Vec<Value> = links
         .iter()
         .map(|(n, s, _)| {
@@ -99,7 +122,13 @@ fn agent(name: &str, kind: &str, eye: &str, links: &[LinkSpec]) -> Value {
             json!({ "name": n, "shapes": shapes })
         })
         .collect();
+    let hands: Vec<Value> = roles
+        .hands
+        .iter()
+        .map(|(tool, links)| json!({ "tool_link": tool, "links": links }))
+        .collect();
     json!({ "name": name, "kind": kind, "eye_link": eye, "links": ls,
+            "shoulder_links": roles.shoulders, "hands": hands,
             "link_poses": posture(links, &[]) })
 }
 
@@ -119,7 +148,10 @@ pub fn scene() -> Value {
                 { "name": "book", "movable": true, "shape": cuboid(0.1, 0.07, 0.02),
                   "pose": at(1.0, -0.2, 0.77) }
             ],
-            "agents": [ agent("bot", "robot", "camera", BOT), agent("member", "human", "eye", MEMBER) ]
+            "agents": [
+                agent("bot", "robot", "camera", BOT, &BOT_ROLES),
+                agent("member", "human", "eye", MEMBER, &MEMBER_ROLES)
+            ]
         },
         "steps": []
     })

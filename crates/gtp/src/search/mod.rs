@@ -153,8 +153,8 @@ pub(crate) struct Search {
     motions: HashMap<usize, Arc<GraspMotions>>,
     /// Per placement of a placing task: its human-related verdict so far.
     verdicts: HashMap<PlacementKey, Verdict>,
-    /// Per level: human shoulder positions allowed by that level (reach), computed lazily.
-    human_shoulders: HashMap<u8, Vec<Vector>>,
+    /// Per level: the points the human's arms reach from at that level, computed lazily.
+    human_reach_origins: HashMap<u8, Vec<Vector>>,
     /// The robot's arms left out of the choices because their grippers hold something else.
     busy_arms: Vec<String>,
     rejections: Rejections,
@@ -222,7 +222,7 @@ impl Search {
             pick_cache: HashMap::new(),
             motions: HashMap::new(),
             verdicts: HashMap::new(),
-            human_shoulders: HashMap::new(),
+            human_reach_origins: HashMap::new(),
             busy_arms: grasps.busy_arms,
             rejections: Rejections::default(),
             failure: None,

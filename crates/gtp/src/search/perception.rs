@@ -1,57 +1,55 @@
 //! What the human reaches and may see at an effort level, as the candidate points' filters
-//! test it (microseconds a point): reach spheres around the shoulders of the stances a level
-//! allows, and the field of view widened by the head's turn, with a clear line of sight.
+//! test it (microseconds a point), by the rules of `geometry::perception`: a hand at the
+//! object, reach spheres around the shoulders of the stances a level allows, and the field of
+//! view widened by the head's turn, with a clear line of sight.
 
-use geometry::effort;
+use geometry::{effort, perception};
 use parry3d::math::Vector;
 use parry3d::query::{Ray, RayCast};
 
 use super::Search;
 
-/// A hand counts as at a point within this distance (metres): level 0's reach.
-const HAND_TOLERANCE: f32 = 0.1;
-
 impl Search {
-    /// Shoulder positions of the human's stances at effort levels up to `level`.
-    fn shoulders_upto(&mut self, level: u8) -> Vec<Vector> {
+    /// Points the human's arms reach from at effort levels 1 up to `level` (the shoulders of
+    /// every stance those levels allow, [`perception::reach_origins`]).
+    fn reach_origins_upto(&mut self, level: u8) -> Vec<Vector> {
         let Some(h) = self.human else {
             return Vec::new();
         };
         let mut out = Vec::new();
         for l in 1..=level {
             let world = &self.world;
-            let shoulders = self.human_shoulders.entry(l).or_insert_with(|| {
-                let mut s = Vec::new();
-                for st in effort::stances(world, h, l, None) {
-                    s.extend(effort::shoulders(world, h, st.base, &st.q));
-                }
-                s
+            let origins = self.human_reach_origins.entry(l).or_insert_with(|| {
+                effort::stances(world, h, l, None)
+                    .iter()
+                    .flat_map(|st| perception::reach_origins(world, h, st))
+                    .collect()
             });
-            out.extend(shoulders.iter().copied());
+            out.extend(origins.iter().copied());
         }
         out
     }
 
-    /// Whether the human reaches `p` at effort `level` or lower (level 0: at the hand; 1 and
-    /// more: within arm's reach of a shoulder of a stance the level allows).
+    /// Whether the human reaches the task's object centred at `p` at effort `level` or lower
+    /// (level 0: a hand at the object; 1 and more: within arm's reach of a shoulder of a
+    /// stance the level allows).
     pub(super) fn human_reaches(&mut self, p: Vector, level: u8) -> bool {
         let Some(h) = self.human else { return false };
-        let info = self.world.agent(h);
-        let reach = info.reach;
-        let st = self.world.agent_state(h);
-        if info
-            .hand_links
-            .iter()
-            .any(|&l| (st.link_poses()[l].translation - p).length() <= HAND_TOLERANCE)
-        {
+        // The object's smallest half-extent: the ball that fits in its bounding box, so that
+        // level 0 is claimed only with the hand at the object itself, as the fact
+        // (`geometry::facts`, the distance to the object's surface) will measure it.
+        let extent = self.object.map_or(0.0, |o| {
+            let s = &self.world.object(o).shape;
+            s.compute_local_aabb().half_extents().min_element()
+        });
+        if perception::hand_at(&self.world, h, p, extent) {
             return true;
         }
         if level == 0 {
             return false;
         }
-        self.shoulders_upto(level)
-            .iter()
-            .any(|s| (*s - p).length() <= reach)
+        let origins = self.reach_origins_upto(level);
+        perception::within_reach(&self.world, h, &origins, p)
     }
 
     /// Whether the eye may see `p` at effort `level`: inside the field of view (level 0) or the
@@ -59,7 +57,6 @@ impl Search {
     pub(super) fn may_see(&self, p: Vector, level: u8) -> bool {
         let Some(h) = self.human else { return true };
         let eye = self.world.eye_pose(h);
-        let info = self.world.agent(h);
         let d = eye.rotation.inverse() * (p - eye.translation);
         if d.x <= 0.0 {
             // Behind the eye: only a turn of the torso or more helps.
@@ -67,15 +64,7 @@ impl Search {
                 return false;
             }
         } else {
-            let (mut ha, mut va) = (info.fov[0] / 2.0, info.fov[1] / 2.0);
-            if level >= 1 {
-                if let Some(pan) = info.effort.head_pan {
-                    ha += pan.upper.abs().max(pan.lower.abs());
-                }
-                if let Some(tilt) = info.effort.head_tilt {
-                    va += tilt.upper.abs().max(tilt.lower.abs());
-                }
-            }
+            let [ha, va] = perception::view_half_angles(&self.world, h, level);
             if d.y.atan2(d.x).abs() > ha || d.z.atan2(d.x).abs() > va {
                 return level >= 2;
             }

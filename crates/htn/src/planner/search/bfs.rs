@@ -126,6 +126,45 @@ struct Heur {
     rc_state: u32,
 }
 
+/// The best-first search's open list and the tables behind it: interned states, the nodes
+/// (each pointing to its parent), the state-free cost per network cell, the (state, network)
+/// pairs generated so far, and the heuristic's memory.
+struct Frontier {
+    hr: Heur,
+    /// The weight of the estimate in a node's priority.
+    wh: u32,
+    states: States,
+    nodes: Vec<Node>,
+    cell_cost: Vec<u32>,
+    /// (priority, tie-break, node); the tie-break counts down so the newest node comes first.
+    open: BinaryHeap<Reverse<(u32, u64, u32)>>,
+    seen: HashSet<(u32, u64), BuildHasherDefault<FxHasher>>,
+    seq: u64,
+    /// The state the search's state holds now.
+    cur_state: u32,
+    rss: RssCache,
+}
+
+impl Frontier {
+    fn push(&mut self, node: Node, priority: u32) {
+        self.nodes.push(node);
+        self.open
+            .push(Reverse((priority, self.seq, self.nodes.len() as u32 - 1)));
+        self.seq -= 1;
+    }
+
+    /// Bytes the tables are about to allocate (those at capacity double).
+    fn growth(&self) -> usize {
+        vec_growth::<Node>(self.nodes.len(), self.nodes.capacity())
+            + vec_growth::<Reverse<(u32, u64, u32)>>(self.open.len(), self.open.capacity())
+            + set_growth(&self.seen)
+            + vec_growth::<Box<[u32]>>(self.states.list.len(), self.states.list.capacity())
+            + table_growth::<(Box<[u32]>, u32)>(self.states.ids.len(), self.states.ids.capacity())
+            + table_growth::<((u32, u32, u8), u32)>(self.hr.memo.len(), self.hr.memo.capacity())
+            + vec_growth::<u32>(self.cell_cost.len(), self.cell_cost.capacity())
+    }
+}
+
 impl<'a, 'o> Search<'a, 'o> {
     /// The fewest actions ground task `gt` may need, looking `depth` levels down in the
     /// current state (state `sid`): a task's estimate is the least, over the methods and
@@ -284,102 +323,28 @@ impl<'a, 'o> Search<'a, 'o> {
 
     /// The weighted A* search, until a plan, exhaustion or a limit of the options.
     pub(super) fn best_first(&mut self) -> Stop {
-        let c = self.c;
         self.reset();
         self.canonical_order();
         self.state.commit();
         self.stats.best_first = true;
-        let (wg, wh) = (G_WEIGHT, H_WEIGHT);
-        let cost = min_costs(c);
-        let rc = Rc::build(c, self.grounding_caps());
-        let wh = if rc.is_some() { RC_H_WEIGHT } else { wh };
-        if let Some(rc) = &rc {
-            self.stats.rc_actions = rc.n_actions as u64;
-            self.stats.rc_methods = rc.n_methods as u64;
-        }
-        let mut hr = Heur {
-            cost: cost.clone(),
-            memo: FxMap::default(),
-            depth: LOOKAHEAD,
-            k: LOOK_BINDINGS,
-            rc,
-            rc_state: u32::MAX,
-        };
-        let mut states = States::default();
-        let mut nodes: Vec<Node> = Vec::new();
-        let mut cell_cost: Vec<u32> = Vec::new();
-        let mut open: BinaryHeap<Reverse<(u32, u64, u32)>> = BinaryHeap::new();
-        let mut seen: HashSet<(u32, u64), BuildHasherDefault<FxHasher>> = HashSet::default();
-        let mut seq: u64 = u64::MAX;
-        let s0 = self.snapshot();
-        let sid0 = intern_state(&mut states, s0);
-        let mut cur_state = sid0;
-        // The initial networks, one per binding of the problem's parameters.
-        let root = c.root_method;
-        let (bindings, count) = self.bindings(root, NIL);
-        let stride = c.methods[root as usize].n_params;
-        for i in 0..count {
-            let binding = bindings[i * stride..(i + 1) * stride].to_vec();
-            let subs = &c.methods[root as usize].subtasks;
-            let n = subs.len() as u32;
-            let (top, h) = self.push_network(subs, &binding, 0, NIL, 0, &cost, &mut cell_cost);
-            if h >= INF {
-                continue;
-            }
-            let hash = self.network_hash(top);
-            if !seen.insert((sid0, hash)) {
-                continue;
-            }
-            let h = self.net_estimate(top, sid0, &mut hr, &cell_cost);
-            if h >= INF {
-                continue;
-            }
-            nodes.push(Node {
-                parent: NIL,
-                state: sid0,
-                tn: top,
-                next_occ: n,
-                g: 0,
-                op: Op::Root { first: 0, n },
-            });
-            open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
-            seq -= 1;
-        }
-        let mut scratch: Vec<(u32, Vec<u32>)> = Vec::new();
-        let mut rss = RssCache::default();
-        while let Some(Reverse((_, _, ni))) = open.pop() {
+        let mut f = self.new_frontier();
+        self.seed_roots(&mut f);
+        while let Some(Reverse((_, _, ni))) = f.open.pop() {
             self.stats.nodes += 1;
             self.stats.best_first_nodes += 1;
-            let growth = vec_growth::<Node>(nodes.len(), nodes.capacity())
-                + vec_growth::<Reverse<(u32, u64, u32)>>(open.len(), open.capacity())
-                + set_growth(&seen)
-                + vec_growth::<Box<[u32]>>(states.list.len(), states.list.capacity())
-                + table_growth::<(Box<[u32]>, u32)>(states.ids.len(), states.ids.capacity())
-                + table_growth::<((u32, u32, u8), u32)>(hr.memo.len(), hr.memo.capacity())
-                + vec_growth::<u32>(cell_cost.len(), cell_cost.capacity())
-                + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
-            if growth > 0
-                && let Some(mb) = self.opts.limits.memory_mb
-                && rss.get().saturating_add(growth as u64 >> 10) > mb.saturating_mul(1024)
-            {
-                return Stop::Limit(Limit::Memory);
+            if let Some(stop) = self.bfs_limit(&mut f) {
+                return stop;
             }
-            if let Some(l) = self.check_limits() {
-                return Stop::Limit(l);
-            }
-            if self.stats.nodes % 4096 == 0 {
-                self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
-            }
-            let node = &nodes[ni as usize];
-            let (sid, tn, next_occ, g) = (node.state, node.tn, node.next_occ, node.g);
-            if sid != cur_state {
-                let key = states.list[sid as usize].clone();
+            let node = &f.nodes[ni as usize];
+            let (sid, tn) = (node.state, node.tn);
+            if sid != f.cur_state {
+                let key = f.states.list[sid as usize].clone();
                 self.load(&key);
-                cur_state = sid;
+                f.cur_state = sid;
             }
             if tn == NIL {
                 if self.goal_holds() {
-                    self.rebuild_path(&nodes, ni);
+                    self.rebuild_path(&f.nodes, ni);
                     return Stop::Found;
                 }
                 continue;
@@ -389,113 +354,196 @@ impl<'a, 'o> Search<'a, 'o> {
                 self.stats.goal_pruned += 1;
                 continue;
             }
-            let rest_cost = if cell.next == NIL {
-                0
-            } else {
-                cell_cost[cell.next as usize]
-            };
             let task = self.gtasks.key(cell.task)[0];
-            if let Some(a) = c.tasks[task as usize].action {
-                let act = &c.actions[a as usize];
-                let Some(mut slots) = self.action_slots(a, cell.task) else {
-                    continue;
-                };
-                let ev = Eval {
-                    c,
-                    s: &self.state,
-                    types: &act.slot_types,
-                };
-                if !ev.all_hold(&act.pre, &mut slots) {
-                    continue;
-                }
-                self.effects.clear();
-                if !ev.effects(&act.effects, &mut slots, &mut self.effects) {
-                    continue;
-                }
-                self.effects.apply(&mut self.state);
-                self.canonical_order();
-                self.state.commit();
-                let key = self.snapshot();
-                let sid2 = intern_state(&mut states, key);
-                cur_state = sid2;
-                let hash = self.network_hash(cell.next);
-                if !seen.insert((sid2, hash)) {
-                    self.stats.revisits_pruned += 1;
-                    continue;
-                }
-                let h = self.net_estimate(cell.next, sid2, &mut hr, &cell_cost);
-                if h >= INF {
-                    continue;
-                }
-                nodes.push(Node {
-                    parent: ni,
-                    state: sid2,
-                    tn: cell.next,
-                    next_occ,
-                    g: g + 1,
-                    op: Op::Action {
-                        occ: cell.occ,
-                        task: cell.task,
-                    },
-                });
-                let h = prio(g + 1, h, wg, wh);
-                open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
-                seq -= 1;
-                continue;
-            }
-            // Every method and binding, in domain order.
-            scratch.clear();
-            for &m in self.methods_of(cell.task) {
-                let (bindings, count) = self.bindings(m, cell.task);
-                let stride = c.methods[m as usize].n_params;
-                for i in 0..count {
-                    scratch.push((m, bindings[i * stride..(i + 1) * stride].to_vec()));
-                }
-            }
-            for (m, binding) in std::mem::take(&mut scratch) {
-                let subs = &c.methods[m as usize].subtasks;
-                let n = subs.len() as u32;
-                let (top, h) = self.push_network(
-                    subs,
-                    &binding,
-                    next_occ,
-                    cell.next,
-                    rest_cost,
-                    &cost,
-                    &mut cell_cost,
-                );
-                if h >= INF {
-                    continue;
-                }
-                let hash = self.network_hash(top);
-                if !seen.insert((sid, hash)) {
-                    self.stats.revisits_pruned += 1;
-                    continue;
-                }
-                let h = self.net_estimate(top, sid, &mut hr, &cell_cost);
-                if h >= INF {
-                    continue;
-                }
-                let h = prio(g, h, wg, wh);
-                nodes.push(Node {
-                    parent: ni,
-                    state: sid,
-                    tn: top,
-                    next_occ: next_occ + n,
-                    g,
-                    op: Op::Method {
-                        occ: cell.occ,
-                        task: cell.task,
-                        method: m,
-                        first: next_occ,
-                        n,
-                    },
-                });
-                open.push(Reverse((h, seq, nodes.len() as u32 - 1)));
-                seq -= 1;
+            match self.c.tasks[task as usize].action {
+                Some(a) => self.bfs_apply_action(&mut f, ni, cell, a),
+                None => self.bfs_decompose(&mut f, ni, cell),
             }
         }
         Stop::Exhausted
+    }
+
+    /// The open list of a new best-first search, its heuristic (the relaxed composition when
+    /// its grounding fits the caps) and the initial state interned.
+    fn new_frontier(&mut self) -> Frontier {
+        let c = self.c;
+        let rc = Rc::build(c, self.grounding_caps());
+        let wh = if rc.is_some() { RC_H_WEIGHT } else { H_WEIGHT };
+        if let Some(rc) = &rc {
+            self.stats.rc_actions = rc.n_actions as u64;
+            self.stats.rc_methods = rc.n_methods as u64;
+        }
+        let mut f = Frontier {
+            hr: Heur {
+                cost: min_costs(c),
+                memo: FxMap::default(),
+                depth: LOOKAHEAD,
+                k: LOOK_BINDINGS,
+                rc,
+                rc_state: u32::MAX,
+            },
+            wh,
+            states: States::default(),
+            nodes: Vec::new(),
+            cell_cost: Vec::new(),
+            open: BinaryHeap::new(),
+            seen: HashSet::default(),
+            seq: u64::MAX,
+            cur_state: 0,
+            rss: RssCache::default(),
+        };
+        f.cur_state = intern_state(&mut f.states, self.snapshot());
+        f
+    }
+
+    /// The initial networks, one per binding of the problem's parameters, as root nodes
+    /// (their priority the bare estimate).
+    fn seed_roots(&mut self, f: &mut Frontier) {
+        let c = self.c;
+        let sid0 = f.cur_state;
+        let root = c.root_method;
+        let (bindings, count) = self.bindings(root, NIL);
+        let stride = c.methods[root as usize].n_params;
+        for i in 0..count {
+            let binding = bindings[i * stride..(i + 1) * stride].to_vec();
+            let subs = &c.methods[root as usize].subtasks;
+            let n = subs.len() as u32;
+            let (top, h) = self.push_network(subs, &binding, 0, NIL, 0, f);
+            if h >= INF || !f.seen.insert((sid0, self.network_hash(top))) {
+                continue;
+            }
+            let h = self.net_estimate(top, sid0, &mut f.hr, &f.cell_cost);
+            if h < INF {
+                f.push(
+                    Node {
+                        parent: NIL,
+                        state: sid0,
+                        tn: top,
+                        next_occ: n,
+                        g: 0,
+                        op: Op::Root { first: 0, n },
+                    },
+                    h,
+                );
+            }
+        }
+    }
+
+    /// The limit that stops the search now, if any: memory (the tables' coming growth
+    /// counted before it happens), time or nodes.
+    fn bfs_limit(&mut self, f: &mut Frontier) -> Option<Stop> {
+        let growth = f.growth() + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
+        if growth > 0
+            && let Some(mb) = self.opts.limits.memory_mb
+            && f.rss.get().saturating_add(growth as u64 >> 10) > mb.saturating_mul(1024)
+        {
+            return Some(Stop::Limit(Limit::Memory));
+        }
+        if let Some(l) = self.check_limits() {
+            return Some(Stop::Limit(l));
+        }
+        if self.stats.nodes % 4096 == 0 {
+            self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
+        }
+        None
+    }
+
+    /// Node `ni`'s successor by action `a` (its first task), if the action applies.
+    fn bfs_apply_action(&mut self, f: &mut Frontier, ni: u32, cell: Cell, a: u32) {
+        let c = self.c;
+        let (next_occ, g) = (f.nodes[ni as usize].next_occ, f.nodes[ni as usize].g);
+        let act = &c.actions[a as usize];
+        let Some(mut slots) = self.action_slots(a, cell.task) else {
+            return;
+        };
+        let ev = Eval {
+            c,
+            s: &self.state,
+            types: &act.slot_types,
+        };
+        if !ev.all_hold(&act.pre, &mut slots) {
+            return;
+        }
+        self.effects.clear();
+        if !ev.effects(&act.effects, &mut slots, &mut self.effects) {
+            return;
+        }
+        self.effects.apply(&mut self.state);
+        self.canonical_order();
+        self.state.commit();
+        let sid2 = intern_state(&mut f.states, self.snapshot());
+        f.cur_state = sid2;
+        if !f.seen.insert((sid2, self.network_hash(cell.next))) {
+            self.stats.revisits_pruned += 1;
+            return;
+        }
+        let h = self.net_estimate(cell.next, sid2, &mut f.hr, &f.cell_cost);
+        if h >= INF {
+            return;
+        }
+        let node = Node {
+            parent: ni,
+            state: sid2,
+            tn: cell.next,
+            next_occ,
+            g: g + 1,
+            op: Op::Action {
+                occ: cell.occ,
+                task: cell.task,
+            },
+        };
+        f.push(node, prio(g + 1, h, G_WEIGHT, f.wh));
+    }
+
+    /// Node `ni`'s successors by every method and binding of its first task, in domain order.
+    fn bfs_decompose(&mut self, f: &mut Frontier, ni: u32, cell: Cell) {
+        let c = self.c;
+        let node = &f.nodes[ni as usize];
+        let (sid, next_occ, g) = (node.state, node.next_occ, node.g);
+        let rest_cost = if cell.next == NIL {
+            0
+        } else {
+            f.cell_cost[cell.next as usize]
+        };
+        let mut choices: Vec<(u32, Vec<u32>)> = Vec::new();
+        for &m in self.methods_of(cell.task) {
+            let (bindings, count) = self.bindings(m, cell.task);
+            let stride = c.methods[m as usize].n_params;
+            for i in 0..count {
+                choices.push((m, bindings[i * stride..(i + 1) * stride].to_vec()));
+            }
+        }
+        for (m, binding) in choices {
+            let subs = &c.methods[m as usize].subtasks;
+            let n = subs.len() as u32;
+            let (top, h) = self.push_network(subs, &binding, next_occ, cell.next, rest_cost, f);
+            if h >= INF {
+                continue;
+            }
+            if !f.seen.insert((sid, self.network_hash(top))) {
+                self.stats.revisits_pruned += 1;
+                continue;
+            }
+            let h = self.net_estimate(top, sid, &mut f.hr, &f.cell_cost);
+            if h >= INF {
+                continue;
+            }
+            let node = Node {
+                parent: ni,
+                state: sid,
+                tn: top,
+                next_occ: next_occ + n,
+                g,
+                op: Op::Method {
+                    occ: cell.occ,
+                    task: cell.task,
+                    method: m,
+                    first: next_occ,
+                    n,
+                },
+            };
+            f.push(node, prio(g, h, G_WEIGHT, f.wh));
+        }
     }
 
     /// What the grounding of the relaxed composition may spend: its caps, a share of the
@@ -515,8 +563,8 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     /// Pushes `subs` under `binding` on top of network `next` (whose cost is `rest`), with
-    /// occurrence ids from `first`; returns the top cell and the network's cost.
-    #[allow(clippy::too_many_arguments)]
+    /// occurrence ids from `first`; returns the top cell and the network's cost (the
+    /// state-free costs of its tasks, kept per cell in the frontier).
     fn push_network(
         &mut self,
         subs: &[(u32, Vec<CTerm>)],
@@ -524,9 +572,9 @@ impl<'a, 'o> Search<'a, 'o> {
         first: u32,
         next: u32,
         rest: u32,
-        cost: &[u32],
-        cell_cost: &mut Vec<u32>,
+        f: &mut Frontier,
     ) -> (u32, u32) {
+        let (cost, cell_cost) = (&f.hr.cost, &mut f.cell_cost);
         let mut top = next;
         let mut h = rest;
         let mut key: Vec<u32> = Vec::with_capacity(8);
