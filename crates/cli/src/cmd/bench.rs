@@ -23,6 +23,8 @@ pub struct Args {
 pub enum Target {
     /// The paper's experiment (Table II): MANAGEORDER with payment by card, many runs.
     Library(LibraryArgs),
+    /// A domain's randomized benchmark: every problem of a folder, scenes nudged per run.
+    Domain(crate::cmd::bench_domain::DomainArgs),
 }
 
 /// Arguments of `htngtp bench library`.
@@ -84,6 +86,7 @@ pub struct LibraryArgs {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.target {
         Target::Library(a) => library(a),
+        Target::Domain(a) => crate::cmd::bench_domain::run(a),
     }
 }
 
