@@ -1,4 +1,7 @@
-//! `htngtp bench`: the paper's experiments.
+//! `htngtp bench`: the paper's experiment (`library`) and how cost grows (`scale`).
+
+mod plot;
+mod scale;
 
 use std::path::PathBuf;
 
@@ -23,6 +26,8 @@ pub struct Args {
 pub enum Target {
     /// The paper's experiment (Table II): MANAGEORDER with payment by card, many runs.
     Library(LibraryArgs),
+    /// How cost grows: MANAGEORDER with N books lent over a desk holding M other objects.
+    Scale(scale::ScaleArgs),
 }
 
 /// Arguments of `htngtp bench library`.
@@ -84,6 +89,7 @@ pub struct LibraryArgs {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.target {
         Target::Library(a) => library(a),
+        Target::Scale(a) => scale::scale(a),
     }
 }
 
