@@ -107,6 +107,24 @@ pub struct RunRecord {
     pub plan_file_error: Option<String>,
 }
 
+impl RunRecord {
+    /// A run that did not plan (its input could not be made): `status` says why.
+    pub fn failed(index: usize, seed: u64, status: String) -> RunRecord {
+        RunRecord {
+            plan_file_error: None,
+            index,
+            seed,
+            solved: false,
+            status,
+            htn_backtracks: 0,
+            gtp_backtracks: 0,
+            actions: 0,
+            time_s: 0.0,
+            tasks: BTreeMap::new(),
+        }
+    }
+}
+
 /// The whole experiment: its runs and their totals (the paper's Table II and run figures).
 #[derive(Clone, Debug, Serialize)]
 pub struct Experiment {
@@ -223,54 +241,17 @@ pub fn run_experiment(
             } else {
                 randomize(world, &options.randomization, seed)
             };
-            let mut run_options = options.run.clone();
-            run_options.oracle.seed = seed;
-            run_options.planner = PlannerOptions {
+            let plans = options.plans.as_deref().map(|d| (d, strategy_name));
+            let record = run_one(
+                domain,
+                problem,
+                scene,
+                &planner,
+                &options.run,
+                i,
                 seed,
-                ..run_options.planner
-            };
-            let t0 = Instant::now();
-            let record = match plan(domain, problem, scene, planner.clone(), &run_options) {
-                Ok(run) => {
-                    let (solved, status, actions) = match &run.result.outcome {
-                        Outcome::Found { plan } => (true, "solved".to_string(), plan.actions.len()),
-                        Outcome::Unsolvable => {
-                            (false, format!("unsolvable: {}", run.failure_message()), 0)
-                        }
-                        Outcome::LimitReached { limit } => (false, format!("limit: {limit}"), 0),
-                    };
-                    let plan_file_error = match (&options.plans, solved) {
-                        (Some(dir), true) => {
-                            write_plan(&run, domain, problem, dir, strategy_name, i).err()
-                        }
-                        _ => None,
-                    };
-                    RunRecord {
-                        plan_file_error,
-                        index: i,
-                        seed,
-                        solved,
-                        status,
-                        htn_backtracks: run.result.stats.htn_backtracks,
-                        gtp_backtracks: run.result.stats.geo_backtracks,
-                        actions,
-                        time_s: t0.elapsed().as_secs_f64(),
-                        tasks: run.oracle.task_stats().clone().into_iter().collect(),
-                    }
-                }
-                Err(e) => RunRecord {
-                    plan_file_error: None,
-                    index: i,
-                    seed,
-                    solved: false,
-                    status: format!("error: {e}"),
-                    htn_backtracks: 0,
-                    gtp_backtracks: 0,
-                    actions: 0,
-                    time_s: t0.elapsed().as_secs_f64(),
-                    tasks: BTreeMap::new(),
-                },
-            };
+                plans,
+            );
             progress();
             record
         })
@@ -279,6 +260,64 @@ pub fn run_experiment(
         strategy: strategy_name.to_string(),
         runs,
         wall_time_s: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// One run: plans `problem` in `scene` with every seed set to `seed`, and records it as run
+/// `index`; with `plans` (a folder and the strategy's name), writes a solved run's plan JSON
+/// there. Shared by the Table II experiment and the scale benchmark ([`crate::scale`]).
+#[allow(clippy::too_many_arguments)]
+pub fn run_one(
+    domain: &Domain,
+    problem: &Problem,
+    scene: World,
+    planner: &Arc<Planner>,
+    options: &RunOptions,
+    index: usize,
+    seed: u64,
+    plans: Option<(&std::path::Path, &str)>,
+) -> RunRecord {
+    let mut run_options = options.clone();
+    run_options.oracle.seed = seed;
+    run_options.planner = PlannerOptions {
+        seed,
+        ..run_options.planner
+    };
+    let t0 = Instant::now();
+    match plan(domain, problem, scene, planner.clone(), &run_options) {
+        Ok(run) => {
+            let (solved, status, actions) = match &run.result.outcome {
+                Outcome::Found { plan } => (true, "solved".to_string(), plan.actions.len()),
+                Outcome::Unsolvable => (false, format!("unsolvable: {}", run.failure_message()), 0),
+                Outcome::LimitReached { limit } => (
+                    false,
+                    format!("limit: {limit} ({})", run.failure_message()),
+                    0,
+                ),
+            };
+            let plan_file_error = match (plans, solved) {
+                (Some((dir, strategy)), true) => {
+                    write_plan(&run, domain, problem, dir, strategy, index).err()
+                }
+                _ => None,
+            };
+            RunRecord {
+                plan_file_error,
+                index,
+                seed,
+                solved,
+                status,
+                htn_backtracks: run.result.stats.htn_backtracks,
+                gtp_backtracks: run.result.stats.geo_backtracks,
+                actions,
+                time_s: t0.elapsed().as_secs_f64(),
+                tasks: run.oracle.task_stats().clone().into_iter().collect(),
+            }
+        }
+        Err(e) => RunRecord {
+            time_s: t0.elapsed().as_secs_f64(),
+            ..RunRecord::failed(index, seed, format!("error: {e}"))
+        },
     }
 }
 

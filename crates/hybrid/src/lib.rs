@@ -7,8 +7,10 @@
 
 pub mod experiment;
 pub mod export;
+pub mod layout;
 pub mod oracle;
 pub mod run;
+pub mod scale;
 pub mod timing;
 
 pub use oracle::{GtpOracle, OracleConfig};

@@ -1,7 +1,6 @@
 //! One module per subcommand; each exposes `Args` (clap) and `run(Args) -> anyhow::Result<u8>`.
 
 pub mod bench;
-pub mod bench_domain;
 pub mod bench_hddl;
 pub mod check;
 pub mod demo;

@@ -1,4 +1,8 @@
-//! `htngtp bench`: the paper's experiments.
+//! `htngtp bench`: the paper's experiment (`library`) and how cost grows (`scale`).
+
+mod domain;
+mod plot;
+mod scale;
 
 use std::path::PathBuf;
 
@@ -24,7 +28,9 @@ pub enum Target {
     /// The paper's experiment (Table II): MANAGEORDER with payment by card, many runs.
     Library(LibraryArgs),
     /// A domain's randomized benchmark: every problem of a folder, scenes nudged per run.
-    Domain(crate::cmd::bench_domain::DomainArgs),
+    Domain(domain::DomainArgs),
+    /// How cost grows: MANAGEORDER with N books lent over a desk holding M other objects.
+    Scale(scale::ScaleArgs),
 }
 
 /// Arguments of `htngtp bench library`.
@@ -86,7 +92,8 @@ pub struct LibraryArgs {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.target {
         Target::Library(a) => library(a),
-        Target::Domain(a) => crate::cmd::bench_domain::run(a),
+        Target::Domain(a) => domain::run(a),
+        Target::Scale(a) => scale::scale(a),
     }
 }
 
