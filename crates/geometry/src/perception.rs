@@ -32,9 +32,12 @@ pub fn hand_positions(world: &World, agent: AgentId) -> Vec<Vector> {
 /// object centred at `p` (the ball that fits in its bounding box, so that the hand is at the
 /// object itself).
 pub fn hand_at(world: &World, agent: AgentId, p: Vector, extent: f32) -> bool {
-    hand_positions(world, agent)
+    let poses = world.agent_state(agent).link_poses();
+    world
+        .agent(agent)
+        .hand_links
         .iter()
-        .any(|h| (*h - p).length() <= HAND_TOLERANCE + extent)
+        .any(|&h| (poses[h].translation - p).length() <= HAND_TOLERANCE + extent)
 }
 
 /// The configurations a stance reaches from: the stance itself and, at the highest level

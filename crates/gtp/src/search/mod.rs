@@ -128,6 +128,10 @@ pub(crate) struct Search {
     started: Option<Instant>,
     elapsed: Duration,
     object: Option<ObjectId>,
+    /// The object's smallest half-extent (0 without one): the ball that fits in its bounding
+    /// box, so that the human's level 0 is claimed only with a hand at the object itself, as
+    /// the fact (`geometry::facts`, the distance to the object's surface) will measure it.
+    object_inner_radius: f32,
     human: Option<AgentId>,
     /// Joint values of the robot at the start.
     q0_full: Vec<f32>,
@@ -192,6 +196,10 @@ impl Search {
                     .map_err(|e| e.to_string())?;
             }
         }
+        let object_inner_radius = object.map_or(0.0, |o| {
+            let shape = &world.object(o).shape;
+            shape.compute_local_aabb().half_extents().min_element()
+        });
         let levels: Vec<u8> = match task.kind {
             TaskKind::Pick | TaskKind::PlaceOn | TaskKind::NavigateTo => vec![0],
             _ => (0..=c.max_effort).collect(),
@@ -208,6 +216,7 @@ impl Search {
             started: None,
             elapsed: Duration::default(),
             object,
+            object_inner_radius,
             q0_full,
             obstacles,
             arm_shoulders,

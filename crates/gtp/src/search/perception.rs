@@ -35,14 +35,7 @@ impl Search {
     /// stance the level allows).
     pub(super) fn human_reaches(&mut self, p: Vector, level: u8) -> bool {
         let Some(h) = self.human else { return false };
-        // The object's smallest half-extent: the ball that fits in its bounding box, so that
-        // level 0 is claimed only with the hand at the object itself, as the fact
-        // (`geometry::facts`, the distance to the object's surface) will measure it.
-        let extent = self.object.map_or(0.0, |o| {
-            let s = &self.world.object(o).shape;
-            s.compute_local_aabb().half_extents().min_element()
-        });
-        if perception::hand_at(&self.world, h, p, extent) {
+        if perception::hand_at(&self.world, h, p, self.object_inner_radius) {
             return true;
         }
         if level == 0 {
