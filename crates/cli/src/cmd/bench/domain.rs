@@ -246,14 +246,38 @@ fn one_run(
 }
 
 /// `bench library`'s randomized copy of `world`, drawn again (at most 20 times, else the scene
-/// as it is) while a movable object sinks more than 1 mm into another object. `randomize` lets
-/// an object overlap what it rests on (its support), which for a thing standing in a container
-/// includes the container's walls and dividers: a start in collision that no plan can leave.
+/// as it is) while a movable object sinks more than 1 mm into another object or lies on a
+/// movable object with its centre beyond that one's footprint. `randomize` moves each object on
+/// its own and lets it overlap what it rests on, which for a thing standing in a container
+/// includes the container's walls: a start in collision that no plan can leave, or a folder
+/// left toppling off the wallet it lay on.
 fn nudged(world: &World, seed: u64) -> World {
     (0..20u64)
         .map(|k| randomize(world, &Randomization::default(), seed ^ (k << 48)))
-        .find(|w| !overlaps(w))
+        .find(|w| !overlaps(w) && !toppling(world, w))
         .unwrap_or_else(|| world.clone())
+}
+
+/// Whether a movable object that rests on another movable object in `start` has, in `world`,
+/// its centre outside that object's footprint (its bounding box in its own frame, seen from
+/// above). The pairs come from `start`: in `world` the `on` test itself needs the centre over
+/// the footprint.
+fn toppling(start: &World, world: &World) -> bool {
+    let movable: Vec<_> = start
+        .object_ids()
+        .filter(|&o| start.object(o).movable)
+        .collect();
+    movable.iter().any(|&a| {
+        movable.iter().any(|&b| {
+            a != b && geometry::facts::on(start, a, b, 0.02) && {
+                let c = world.object_aabb(a).center();
+                let local = world.object_shape_pose(b).inverse_transform_point(c);
+                let lb = world.object(b).shape.compute_local_aabb();
+                !(lb.mins.x..=lb.maxs.x).contains(&local.x)
+                    || !(lb.mins.y..=lb.maxs.y).contains(&local.y)
+            }
+        })
+    })
 }
 
 /// Whether a movable object of `world` sinks more than 1 mm into another object.
