@@ -6,9 +6,10 @@
 //! ([`crate::layout::SceneText`]): its two books removed; a second librarians' table, the
 //! first's mirror image, on the robot's left (the shelf and the POS machine moved 0.67 m
 //! further left to make room); N small books standing on their long edge in slots of the two
-//! tables (12 slots each, two rows of six, 8 cm apart: room for the gripper's fingers between
-//! two books; the rows 2 cm apart end to end, the far one still within the arm's reach), drawn at random and nudged by up to 1 cm and 5 degrees; M small boxes and
-//! cylinders (4 to 8 cm across) at random free spots of the desk, 4 cm apart. The problem gives
+//! tables (two rows of six each, 8 cm apart: room for the gripper's fingers between two books;
+//! the rows 2 cm apart end to end; the 16 slots the arm picks from its station kept), drawn at
+//! random and nudged by up to 1 cm and 5 degrees; M small boxes and cylinders (3 to 8 cm
+//! across) at random free spots of the desk, 3 cm apart. The problem gives
 //! the member credit for exactly N books, so payment is the library account (m6): the family
 //! measures lending alone. Everything is drawn from one seed: the same seed, the same scenes.
 
@@ -25,10 +26,16 @@ use crate::experiment::{RunRecord, run_one};
 use crate::layout::{Footprints, NewObject, NewShape, SceneText, surfaces};
 use crate::run::RunOptions;
 
-/// Book slots per librarians' table (two rows of six).
+/// Book slots per librarians' table (two rows of six), before those out of the arm's way are
+/// dropped ([`book_slots`]).
 const SLOTS_PER_TABLE: usize = 12;
-/// The most books a generated scene holds: every slot of both tables.
-pub const MAX_BOOKS: usize = 2 * SLOTS_PER_TABLE;
+/// The most books a generated scene holds: the slots the robot picks from its station.
+pub const MAX_BOOKS: usize = 16;
+/// A slot nearer the robot's base than this (horizontally, metres), or behind it, is dropped:
+/// the gripper comes down onto a standing book from above, which the arm cannot do right
+/// beside or behind the base (found with `htngtp gtp SCENE pick book-I` on every slot: each
+/// kept slot is picked, each dropped one but one is not).
+const SLOT_CLEARANCE_FROM_BASE: f32 = 0.6;
 /// How far the shelf (with the POS machine on it) moves to the left, metres.
 const SHELF_SHIFT: f32 = 0.67;
 
@@ -92,9 +99,15 @@ pub fn generate(library_dir: &Path, spec: &ScaleSpec) -> Result<ScaleProblem, St
 }
 
 /// The centres of `n` books standing on their long edge (0.14 m tall), in slots of the two
-/// librarians' tables drawn at random, each nudged by up to 1 cm.
+/// librarians' tables drawn at random, each nudged by up to 1 cm; slots beside or behind the
+/// robot's base are left out ([`SLOT_CLEARANCE_FROM_BASE`]).
 fn book_slots(world: &World, n: usize, rng: &mut fastrand::Rng) -> Result<Vec<[f32; 3]>, String> {
-    let mut slots = Vec::with_capacity(MAX_BOOKS);
+    let robot = world
+        .agent_ids()
+        .find(|&a| world.agent(a).kind() == geometry::scene::AgentKind::Robot)
+        .ok_or("the scene has no robot")?;
+    let base = world.agent_state(robot).base.translation;
+    let mut slots = Vec::with_capacity(2 * SLOTS_PER_TABLE);
     for table in ["table", "table-2"] {
         let id = world
             .object_id(table)
@@ -109,9 +122,18 @@ fn book_slots(world: &World, n: usize, rng: &mut fastrand::Rng) -> Result<Vec<[f
             let y = s.centre.y + toward * (0.19 - 0.22 * row as f32);
             for col in 0..SLOTS_PER_TABLE / 2 {
                 let x = s.centre.x - 0.2 + 0.08 * col as f32;
-                slots.push([x, y, s.centre.z + 0.0702]);
+                let (dx, dy) = (x - base.x, y - base.y);
+                if dx >= 0.0 && dx.hypot(dy) >= SLOT_CLEARANCE_FROM_BASE {
+                    slots.push([x, y, s.centre.z + 0.0702]);
+                }
             }
         }
+    }
+    if slots.len() < n {
+        return Err(format!(
+            "{n} books: the tables have {} slots the robot picks from",
+            slots.len()
+        ));
     }
     rng.shuffle(&mut slots);
     let mut nudge = || (rng.f32() * 2.0 - 1.0) * 0.01;
@@ -122,7 +144,7 @@ fn book_slots(world: &World, n: usize, rng: &mut fastrand::Rng) -> Result<Vec<[f
         .collect())
 }
 
-/// `m` small boxes and cylinders at random free spots of the desk, 4 cm apart.
+/// `m` small boxes and cylinders at random free spots of the desk, 3 cm apart.
 fn desk_objects(
     world: &World,
     m: usize,
@@ -158,7 +180,7 @@ fn desk_objects(
         let yaw: f32 = rng.f32() * 90.0;
         let reach = (half[0] * half[0] + half[1] * half[1]).sqrt();
         let spot = taken
-            .draw(&surface, [reach, reach], 0.01, 0.04, 500, rng)
+            .draw(&surface, [reach, reach], 0.01, 0.03, 2000, rng)
             .ok_or_else(|| format!("no free spot left on the desk for object {}", j + 1))?;
         let z = surface.centre.z + half[2] + 2e-4;
         taken.take(spot, [reach, reach], [surface.centre.z, z + half[2]]);
@@ -442,7 +464,7 @@ mod tests {
         let e = generate(&library(), &spec(MAX_BOOKS + 1, 0, 1))
             .err()
             .unwrap();
-        assert!(e.contains("1 to 24"), "{e}");
+        assert!(e.contains("1 to 16"), "{e}");
         assert!(generate(&library(), &spec(0, 0, 1)).is_err());
     }
 

@@ -159,6 +159,7 @@ fn print_stages(summary: &[CellSummary]) {
 fn print_targets(summary: &[CellSummary]) {
     let cell = |n: usize, m: usize| summary.iter().find(|c| c.books == n && c.others == m);
     let mut ms: Vec<usize> = summary.iter().map(|c| c.others).collect();
+    ms.sort_unstable();
     ms.dedup();
     println!();
     for m in ms {
