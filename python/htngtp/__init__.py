@@ -282,7 +282,8 @@ def gtp(
     Tasks and arguments: ``pick OBJECT``; ``place-on OBJECT SUPPORT``; ``show``, ``give``,
     ``take``, ``make-accessible``, ``put-away``, ``pick-and-make-accessible`` ``OBJECT HUMAN``;
     ``navigate-to TARGET``. ``settings`` overrides thresholds (min-visibility, max-visibility,
-    reach-within, unreachable-within, max-effort, lift, approach, time-limit, max-points);
+    reach-within, unreachable-within, max-effort, robot-effort, lift, approach, time-limit,
+    max-points);
     ``time_limit`` (s) bounds the call (60 s by default). The same seed gives the same
     solutions. Trajectories are timed as the plan JSON's (``max_acceleration`` for joints whose
     URDF declares no acceleration limit).

@@ -29,7 +29,7 @@ use crate::grasp::{GraspCache, GraspParams};
 use crate::placement::PlacementParams;
 use crate::robot::RobotSetup;
 use crate::rrt::RrtParams;
-use crate::search::Search;
+use crate::search::{BaseMoves, Search};
 pub use crate::search::{Failure, Stage};
 use crate::solution::SolutionSummary;
 use crate::stats::Stats;
@@ -388,16 +388,22 @@ impl Planner {
             task,
             constraints,
             search,
+            base_moves: None,
+            seed: options.seed,
         })
     }
 }
 
 /// The solutions of one task call, produced lazily: the first, then on request the next
-/// different one (another point, grasp or orientation).
+/// different one (another point, grasp or orientation). When the task finds nothing from where
+/// the robot stands, the stream goes on from base poses nearby (the robot turns or steps,
+/// [`crate::search::BaseMoves`]); those solutions start with the drive.
 pub struct SolutionStream {
     task: Task,
     constraints: Constraints,
     search: Search,
+    base_moves: Option<BaseMoves>,
+    seed: u64,
 }
 
 impl SolutionStream {
@@ -411,14 +417,23 @@ impl SolutionStream {
         &self.constraints
     }
 
-    /// The statistics so far (cumulative over every solution pulled).
+    /// The statistics so far (cumulative over every solution pulled, the base moves included).
     pub fn stats(&self) -> Stats {
-        self.search.stats
+        let mut s = self.search.stats;
+        if let Some(m) = &self.base_moves {
+            let success = s.success;
+            s.accumulate(&m.stats());
+            s.success = success || m.stats().success;
+        }
+        s
     }
 
     /// Why the stream ended, once it has.
     pub fn failure(&self) -> Option<&Failure> {
-        self.search.failure.as_ref()
+        match &self.base_moves {
+            Some(m) => m.failure(),
+            None => self.search.failure.as_ref(),
+        }
     }
 }
 
@@ -426,7 +441,18 @@ impl Iterator for SolutionStream {
     type Item = Solution;
 
     fn next(&mut self) -> Option<Solution> {
-        self.search.next_solution()
+        if self.base_moves.is_none() {
+            if let Some(s) = self.search.next_solution() {
+                return Some(s);
+            }
+            self.base_moves = Some(BaseMoves::after(&self.search, self.seed)?);
+        }
+        let moves = self.base_moves.as_mut()?;
+        let mut s = moves.next_solution(&self.search)?;
+        let stats = self.stats();
+        s.summary.stats = stats;
+        s.summary.index = stats.solutions - 1;
+        Some(s)
     }
 }
 

@@ -29,6 +29,14 @@ pub struct Stats {
     pub effort_level: u8,
     /// Solutions produced so far.
     pub solutions: usize,
+    /// Base poses nearby tried after the task failed from where the robot stood (a base move
+    /// inside the task: turning in place, then stepping). Absent from the JSON when zero.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub base_poses: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl Stats {
@@ -51,6 +59,7 @@ impl Stats {
                 .visibility_checks
                 .saturating_sub(before.visibility_checks),
             solutions: self.solutions.saturating_sub(before.solutions),
+            base_poses: self.base_poses.saturating_sub(before.base_poses),
             ..*self
         }
     }
@@ -69,5 +78,6 @@ impl Stats {
         self.visibility_checks += other.visibility_checks;
         self.effort_level = self.effort_level.max(other.effort_level);
         self.solutions += other.solutions;
+        self.base_poses += other.base_poses;
     }
 }

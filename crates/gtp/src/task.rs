@@ -132,7 +132,9 @@ pub struct Constraints {
     pub unreachable_within: Option<u8>,
     /// Effort levels of the human searched, from 0 to this (the outer loop of the search).
     pub max_effort: u8,
-    /// The effort level of the robot's reach (1: extend the arm, base fixed).
+    /// The robot's highest effort level: 1 extends the arm only, the base fixed; 2 also turns
+    /// the base in place and 4 also steps it (up to 1 m), both tried inside the task when it
+    /// finds nothing from where the robot stands (`crate::search::BaseMoves`).
     pub robot_effort: u8,
     /// Lift after grasping, and height of the approach above a placement (metres).
     pub lift: f32,
@@ -153,7 +155,7 @@ impl Constraints {
             reach_within: None,
             unreachable_within: None,
             max_effort: 0,
-            robot_effort: 1,
+            robot_effort: 4,
             lift: 0.15,
             approach: 0.10,
             time_limit: Duration::from_secs(60),
@@ -193,8 +195,8 @@ impl Constraints {
     }
 
     /// Sets one threshold by name (`min-visibility`, `max-visibility`, `reach-within`,
-    /// `unreachable-within`, `max-effort`, `lift`, `approach`, `time-limit` in seconds,
-    /// `max-points`); `none` clears an optional one.
+    /// `unreachable-within`, `max-effort`, `robot-effort`, `lift`, `approach`, `time-limit` in
+    /// seconds, `max-points`); `none` clears an optional one.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), String> {
         let key = key.replace('_', "-");
         let float = || -> Result<f32, String> {
@@ -232,6 +234,7 @@ impl Constraints {
                 self.unreachable_within = if none { None } else { Some(level()?) }
             }
             "max-effort" => self.max_effort = level()?,
+            "robot-effort" => self.robot_effort = level()?,
             "lift" => self.lift = float()?.max(0.0),
             "approach" => self.approach = float()?.max(0.0),
             "time-limit" => {
@@ -252,8 +255,8 @@ impl Constraints {
             _ => {
                 return Err(format!(
                     "unknown constraint `{key}` (expected min-visibility, max-visibility, \
-                     reach-within, unreachable-within, max-effort, lift, approach, time-limit, \
-                     max-points)"
+                     reach-within, unreachable-within, max-effort, robot-effort, lift, approach, \
+                     time-limit, max-points)"
                 ));
             }
         }

@@ -611,7 +611,8 @@ fn a_pick_with_both_grippers_full_says_so() {
 /// An object no grasp can pick up where it lies (the cluttered desk's second big book at the
 /// start: out of reach, or the gripper hits what is around it): the search stops after the
 /// first point, where every grasp was tried, and says the pick stopped it (not the deepest
-/// stage some candidate reached).
+/// stage some candidate reached). The base stays where it is (`robot-effort` 1): with base
+/// moves the robot steps to where it can pick the book.
 #[test]
 fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
     let world = World::load(concat!(
@@ -625,7 +626,7 @@ fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
             &world,
             "show",
             &["big-book-2", "member"],
-            &CallOptions::seeded(1),
+            &CallOptions::seeded(1).with("robot-effort", "1"),
         )
         .unwrap();
     assert!(stream.next().is_none());

@@ -24,8 +24,13 @@ use crate::exit;
                   Tasks and arguments: pick OBJECT; place-on OBJECT SUPPORT; show|give|\
                   make-accessible|put-away|pick-and-make-accessible OBJECT HUMAN; navigate-to \
                   TARGET. Thresholds can be changed with --set KEY=VALUE (min-visibility, \
-                  max-visibility, reach-within, unreachable-within, max-effort, lift, approach, \
-                  time-limit, max-points).\n\n\
+                  max-visibility, reach-within, unreachable-within, max-effort, robot-effort, \
+                  lift, approach, time-limit, max-points).\n\n\
+                  When a pick, place or hand-over finds nothing from where the robot stands, the \
+                  same call tries base poses nearby: turning in place, then stepping up to 1 m \
+                  (robot-effort 2 and 4; the default 4; robot-effort=1 keeps the base fixed). \
+                  Such a solution starts with the drive; `base poses nearby` counts the poses \
+                  tried.\n\n\
                   Exit codes: 0 solved, 1 no solution (the report says which constraint stopped \
                   the search), 2 time limit, 3 bad input.",
     after_help = "Example: htngtp gtp domains/library/scene.toml make-accessible grey-book member --solutions 3"
@@ -146,7 +151,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
         println!(
             "stats: time {:.1} ms, success {}, points {}, grasps {}, orientations {}, \
-             trajectory-planner calls {}, IK calls {}, visibility checks {}, effort level {}",
+             trajectory-planner calls {}, IK calls {}, visibility checks {}, effort level {}, \
+             base poses nearby {}",
             stats.time_s * 1e3,
             solved,
             stats.points,
@@ -155,7 +161,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             stats.planner_calls,
             stats.ik_calls,
             stats.visibility_checks,
-            stats.effort_level
+            stats.effort_level,
+            stats.base_poses
         );
     }
     if let (Some(path), Some(w)) = (&args.png, &last_world) {

@@ -21,8 +21,10 @@
 //! | `motions.rs` | the arm motions of one grasp choice, built once; recorded trajectories |
 //! | `take.rs` | `take(o, h)`: the robot lets go, the person takes the object |
 //! | `navigate.rs` | `navigate-to`: base poses and the base's path |
+//! | `base_moves.rs` | a task tried again from base poses nearby when it fails where the robot stands |
 //! | `failure.rs` | typed stages, the typed [`Failure`], the rejections that explain it |
 
+mod base_moves;
 mod cursor;
 mod failure;
 mod grasps;
@@ -51,6 +53,7 @@ use crate::robot::{self, RobotSetup};
 use crate::stats::Stats;
 use crate::task::{Constraints, TaskKind};
 
+pub(crate) use base_moves::BaseMoves;
 use cursor::{Cursor, PlacementKey};
 use failure::Rejections;
 pub use failure::{Failure, Stage};
@@ -166,6 +169,9 @@ pub(crate) struct Search {
     done: bool,
     /// The person's arms, for a take's reach and withdraw.
     pub(crate) person: Option<Arc<RobotSetup>>,
+    /// A navigate-to that serves a base move inside another task: only the poses within this
+    /// distance of the base (metres), turning in place first ([`base_moves`]).
+    stance_radius: Option<f32>,
 }
 
 impl Search {
@@ -237,6 +243,7 @@ impl Search {
             failure: None,
             done: false,
             person: None,
+            stance_radius: None,
         })
     }
 

@@ -121,6 +121,9 @@ impl Search {
     fn base_candidates(&self, target: &ReachTarget) -> Vec<Vector> {
         let robot = self.setup.agent;
         let cur = self.world.agent_state(robot).base.translation;
+        if let Some(radius) = self.stance_radius {
+            return nearby_candidates(target, self.world.agent_state(robot).base, radius);
+        }
         let mut cands = target.base_positions(cur);
         let [sx, sy, _] = self.world.agent(robot).spec.base;
         let station = Vector::new(sx, sy, 0.0);
@@ -237,6 +240,29 @@ impl Search {
             summary,
         }
     }
+}
+
+/// The base poses of a base move inside a task: turning in place to face the target (unless
+/// the base faces it already), then the positions around the target within `radius` of the
+/// base, nearest first.
+fn nearby_candidates(target: &ReachTarget, base: Pose, radius: f32) -> Vec<Vector> {
+    let cur = Vector::new(base.translation.x, base.translation.y, 0.0);
+    let aim = target.nearest(cur) - cur;
+    let facing = base.rotation * Vector::X;
+    let turn = aim.y.atan2(aim.x) - facing.y.atan2(facing.x);
+    let turn =
+        (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI;
+    let mut out = Vec::new();
+    if turn.abs() > 5f32.to_radians() {
+        out.push(cur);
+    }
+    out.extend(
+        target
+            .base_positions(cur)
+            .into_iter()
+            .filter(|p| (*p - cur).length() <= radius),
+    );
+    out
 }
 
 /// Whether every move of the base by 5 cm from the start collides: the failure to report.

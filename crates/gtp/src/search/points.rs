@@ -126,7 +126,9 @@ impl Search {
                 // The maps' cells: the same tests as below, precomputed for the world state.
                 let at_most = |l: Option<u8>, k: u8| l.is_some_and(|l| l <= k);
                 let robot = self.setup.agent;
-                if !at_most(m.reach_level(robot, centre), c.robot_effort)
+                // From where the robot stands: its arm (levels 0 and 1); the base moves are
+                // tried apart.
+                if !at_most(m.reach_level(robot, centre), c.robot_effort.min(1))
                     || c.reach_within
                         .is_some_and(|k| !at_most(m.reach_level(h, centre), k.min(level)))
                     || c.unreachable_within
