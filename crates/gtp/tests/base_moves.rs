@@ -1,8 +1,8 @@
 //! The base moves when the arm cannot reach: in `scene-cart.toml` the books stand on a low cart
 //! beside the robot, beyond the arm's reach from its station. A pick with the base fixed
 //! (`robot-effort` 1) fails; with the default (4: turn, then step) the same task call drives
-//! the base to a pose nearby and picks from there, the drive first in its trajectories, every
-//! trajectory collision-free when replayed at 4x the planner's resolution.
+//! the base to a pose nearby and picks from there (driving back with the book when it can),
+//! every trajectory collision-free when replayed at 4x the planner's resolution.
 
 use geometry::world::World;
 use gtp::planner::{CallOptions, Planner};
@@ -48,11 +48,17 @@ fn a_book_on_the_cart_is_picked_after_a_base_move_inside_the_task() {
         let phases: Vec<Phase> = s.summary.trajectories.iter().map(|t| t.phase).collect();
         assert_eq!(phases[0], Phase::Drive, "{book}: {phases:?}");
         assert!(phases.contains(&Phase::Grasp) && phases.contains(&Phase::Lift));
-        let base = s.summary.robot_base.expect("the base pose reached");
-        let after = s.world.agent_state(robot).base.translation;
-        assert!((after.x - base[0]).abs() < 1e-4 && (after.y - base[1]).abs() < 1e-4);
-        let moved = ((after.x - station.x).powi(2) + (after.y - station.y).powi(2)).sqrt();
+        // Worked from a pose nearby; back where the domain put the robot when the drive back
+        // is free, else still there.
+        let pose = s.summary.base_move.expect("the base pose worked from");
+        let moved = ((pose[0] - station.x).powi(2) + (pose[1] - station.y).powi(2)).sqrt();
         assert!(moved <= 1.0 + 1e-3, "{book}: stepped {moved} m");
+        let after = s.world.agent_state(robot).base.translation;
+        let expected = match phases.last() {
+            Some(Phase::Drive) => station,
+            _ => parry3d::math::Vector::new(pose[0], pose[1], station.z),
+        };
+        assert!((after - expected).length() < 1e-3, "{book}: {after:?}");
         assert!(stream.stats().base_poses >= 1);
         let o = world.object_id(book).unwrap();
         assert_eq!(

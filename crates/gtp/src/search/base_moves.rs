@@ -2,8 +2,12 @@
 //! where the robot stands (out of reach, or blocked from there) is tried again, inside the same
 //! task call, from base poses nearby: turning in place to face the target first, then stepping
 //! to poses within [`STEP_RADIUS`] (as a person turns, then steps: the effort levels 2 and 4 of
-//! `geometry::effort`, allowed by the task's `robot_effort`, 4 by default). Each pose is reached by a collision-free drive (a `navigate-to` search
-//! restricted to those poses), and a solution from there starts with that drive.
+//! `geometry::effort`, allowed by the task's `robot_effort`, 4 by default). Each pose is reached
+//! by a collision-free drive (a `navigate-to` search restricted to those poses); a solution from
+//! there is that drive, the task, and the drive back to where the robot stood when there is one
+//! (the task then leaves the robot where the domain put it: moving it for good is
+//! `navigate-to`'s job), else the robot stays where it worked (an arm held out over furniture
+//! at the station, say).
 
 use std::time::Duration;
 
@@ -15,6 +19,13 @@ use super::{Failure, Search, Stage};
 
 /// How far (metres) a base move inside a task may step from where the robot stands.
 pub(crate) const STEP_RADIUS: f32 = 1.0;
+
+/// At most this many poses nearby are driven to and searched from (the turn, then the nearest
+/// steps): a failing task must not cost many full searches.
+const MAX_POSES_SEARCHED: usize = 4;
+
+/// Each search from a pose nearby may take at most this share of the task's time limit.
+const POSE_TIME_SHARE: u32 = 16;
 
 /// The search of a task from base poses nearby, after it failed where the robot stood.
 pub(crate) struct BaseMoves {
@@ -31,17 +42,22 @@ pub(crate) struct BaseMoves {
     /// Time spent before the base moves (the search where the robot stood).
     spent_before: f64,
     seed: u64,
+    /// Why the task failed from the last pose searched.
+    last_failure: Option<Failure>,
     failure: Option<Failure>,
 }
 
 impl BaseMoves {
     /// The base moves after `search` failed from where the robot stands, or `None` when moving
-    /// the base cannot help: a limit stopped it, the failure concerns the human or the grasp
-    /// set, or the task hands over or puts away what the robot already holds in a take.
+    /// the base cannot help (a limit stopped it, the object has no grasp, the grippers are
+    /// busy), the robot effort allowed is below 2, or the task is a take or a navigate-to.
     pub(crate) fn after(search: &Search, seed: u64) -> Option<BaseMoves> {
         let failure = search.failure.clone()?;
         let effort = search.c.robot_effort;
-        if effort < 2 || failure.limit || !robot_bound(failure.stage) || search.stats.solutions > 0
+        if effort < 2
+            || failure.limit
+            || !base_move_may_help(failure.stage)
+            || search.stats.solutions > 0
         {
             return None;
         }
@@ -67,31 +83,44 @@ impl BaseMoves {
             time_limit: search.c.time_limit,
             spent_before: search.elapsed.as_secs_f64(),
             seed,
+            last_failure: None,
             failure: None,
         })
     }
 
-    /// The next solution from a pose nearby (the drive, then the task), or `None` when every
+    /// The next solution from a pose nearby (the drive there, the task, the drive back), or
+    /// `None` when every
     /// pose is tried or the time is up ([`BaseMoves::failure`] then says why).
     pub(crate) fn next_solution(&mut self, template: &Search) -> Option<Solution> {
         loop {
-            if let Some((drive, search)) = &mut self.here {
-                if let Some(s) = search.next_solution() {
-                    return Some(after_drive(drive, s));
+            let next = self.here.as_mut().map(|(_, search)| search.next_solution());
+            match next {
+                Some(Some(s)) => {
+                    let back = self.drive_back(template, &s);
+                    if let (Err(f), true) = (&back, template.cfg.trace) {
+                        eprintln!("[base move] the robot stays: {f}");
+                    }
+                    let (drive, _) = self.here.as_ref()?;
+                    return Some(around(drive, s, back.ok()));
                 }
-                self.finished.accumulate(&search.stats);
-                self.here = None;
+                Some(None) => {
+                    if let Some((_, search)) = self.here.take() {
+                        self.finished.accumulate(&search.stats);
+                        self.last_failure = search.failure;
+                    }
+                }
+                None => {}
             }
-            let Some(drive) = self.stances.next_solution() else {
-                self.failure = Some(self.explain());
-                return None;
+            let drive = match self.stances.stats.solutions {
+                n if n >= MAX_POSES_SEARCHED => None,
+                _ => self.stances.next_solution(),
             };
-            let Some(left) = self.time_left() else {
+            let (Some(drive), Some(left)) = (drive, self.time_left()) else {
                 self.failure = Some(self.explain());
                 return None;
             };
             let mut c = template.c.clone();
-            c.time_limit = left;
+            c.time_limit = left.min(self.time_limit / POSE_TIME_SHARE);
             let Ok(search) = Search::new(
                 template.cfg.clone(),
                 template.setup.clone(),
@@ -104,6 +133,37 @@ impl BaseMoves {
             };
             self.here = Some((drive, search));
         }
+    }
+
+    /// The drive from where `task` leaves the robot back to where `template`'s search started
+    /// (its statistics counted with the base moves').
+    fn drive_back(&mut self, template: &Search, task: &Solution) -> Result<Solution, Failure> {
+        let robot = template.setup.agent;
+        let pose = template.world.agent_state(robot).base;
+        let yaw = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX).0;
+        let goal = [pose.translation.x, pose.translation.y, yaw];
+        let left = self.time_left().ok_or_else(|| {
+            Failure::at(Stage::TimeLimit, "no time left for the drive back".into())
+        })?;
+        let mut nav = stance_task(template).ok_or_else(|| {
+            Failure::at(Stage::Search, "no navigate-to for the drive back".into())
+        })?;
+        nav.target_point = Some(pose.translation);
+        nav.target_object = None;
+        let mut c = template.c.clone();
+        c.time_limit = left;
+        let mut back = Search::new(
+            template.cfg.clone(),
+            template.setup.clone(),
+            task.world.clone(),
+            nav,
+            c,
+            self.seed,
+        )
+        .map_err(|e| Failure::at(Stage::Search, e))?;
+        let out = back.drive_to(goal);
+        self.finished.planner_calls += back.stats.planner_calls;
+        out
     }
 
     /// The statistics of every search of the base moves (the poses tried as `base_poses`).
@@ -136,13 +196,15 @@ impl BaseMoves {
     fn explain(&self) -> Failure {
         let tried = self.stances.stats.points;
         let out_of_time = self.time_left().is_none();
-        let nearby = match self.stances.failure.as_ref() {
+        let reached = self.stances.stats.solutions;
+        let nearby = match (&self.stances.failure, &self.last_failure) {
             _ if out_of_time => "the time limit was reached".to_string(),
-            Some(f) if self.stances.stats.solutions == 0 => format!("none reached: {}", f.message),
-            _ => format!(
-                "the task failed from each of the {} reached",
-                self.stances.stats.solutions
+            (Some(f), _) if reached == 0 => format!("none reached: {}", f.message),
+            (_, Some(last)) => format!(
+                "the task failed from each of the {reached} searched (the last: {})",
+                last.message
             ),
+            _ => format!("the task failed from each of the {reached} searched"),
         };
         Failure {
             stage: if out_of_time {
@@ -159,23 +221,19 @@ impl BaseMoves {
     }
 }
 
-/// Whether a failure at `stage` concerns the robot's own reach or room to move (a base move
-/// may help), not the human's reach or view or the object's grasp set (it cannot).
-fn robot_bound(stage: Stage) -> bool {
-    matches!(
+/// Whether a base move may help after a failure at `stage`: from elsewhere the robot reaches
+/// other grasps and other placements (and so other views and reaches of the human), but not a
+/// grasp the object lacks, a gripper that is busy, or more time.
+fn base_move_may_help(stage: Stage) -> bool {
+    !matches!(
         stage,
-        Stage::Points
-            | Stage::Pick
-            | Stage::ObjectCollision
-            | Stage::Gripper
-            | Stage::Ik
-            | Stage::Trajectory
-            | Stage::Search
+        Stage::Grasp | Stage::FreeGripper | Stage::Held | Stage::TimeLimit
     )
 }
 
 /// The `navigate-to` whose poses serve `search`'s task: to the object while the robot does not
-/// hold it; once held, to the support (place-on) or the human (show, give, make-accessible).
+/// hold it; once held, to the support (place-on), the human (show, give, make-accessible) or
+/// around the object itself (put-away).
 fn stance_task(search: &Search) -> Option<Task> {
     let kind = search.task.kind;
     let world = &search.world;
@@ -193,6 +251,8 @@ fn stance_task(search: &Search) -> Option<Task> {
         (_, false) => search.object,
         (TaskKind::PlaceOn, true) => search.task.support,
         (TaskKind::Show | TaskKind::Give | TaskKind::MakeAccessible, true) => None,
+        // Anywhere away from the human: the poses around the object held.
+        (TaskKind::PutAway, true) => search.object,
         _ => return None,
     };
     if let Some(o) = target_object {
@@ -207,12 +267,20 @@ fn stance_task(search: &Search) -> Option<Task> {
     Some(nav)
 }
 
-/// `task`'s solution from the end of `drive`: the drive's trajectory first, the base where it
-/// ends.
-fn after_drive(drive: &Solution, mut task: Solution) -> Solution {
+/// `task`'s solution from the end of `drive`, then `back` when there is one: the drives first
+/// and last, the world after the drive back, the pose worked from in `base_move`. Without a
+/// way back (the arm holds the object out where the robot stood), the robot stays.
+fn around(drive: &Solution, mut task: Solution, back: Option<Solution>) -> Solution {
     let mut trajectories = drive.summary.trajectories.clone();
     trajectories.append(&mut task.summary.trajectories);
+    task.summary.base_move = drive.summary.robot_base;
+    match back {
+        Some(back) => {
+            trajectories.extend(back.summary.trajectories);
+            task.world = back.world;
+        }
+        None => task.summary.robot_base = drive.summary.robot_base,
+    }
     task.summary.trajectories = trajectories;
-    task.summary.robot_base = drive.summary.robot_base;
     task
 }

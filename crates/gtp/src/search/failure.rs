@@ -89,6 +89,12 @@ impl fmt::Display for Stage {
     }
 }
 
+/// A grasp choice whose transfers failed this many times in a row (each a motion-planning
+/// query run to its limit, to different placements) is given up: its carry is boxed in where it
+/// starts (one held out between furniture, say), and more targets would spend the call's whole
+/// time limit on it.
+pub(super) const MAX_FAILED_TRANSFERS: usize = 12;
+
 /// Why a task call produced no (further) solution: which stage of the search stopped it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Failure {
@@ -176,15 +182,17 @@ impl Search {
     }
 
     /// A motion carrying the object, as [`Search::or_reject`] at the trajectory stage; a
-    /// start in collision also drops grasp choice `grasp` (its start is the same whatever the
-    /// tuple).
+    /// start in collision (the same whatever the tuple), or [`MAX_FAILED_TRANSFERS`] failures
+    /// in a row, also drops grasp choice `grasp`.
     pub(super) fn transfer_or_reject(
         &mut self,
         r: Result<(JointPath, RrtStats), RrtError>,
         grasp: usize,
         what: impl FnOnce() -> String,
     ) -> Option<JointPath> {
-        if matches!(r, Err(RrtError::InvalidStart)) {
+        let failed = self.failed_transfers.entry(grasp).or_default();
+        *failed = if r.is_ok() { 0 } else { *failed + 1 };
+        if matches!(r, Err(RrtError::InvalidStart)) || *failed >= MAX_FAILED_TRANSFERS {
             self.failed_choices.insert(grasp);
         }
         self.or_reject(r.map(|(p, _)| p), Stage::Trajectory, what)

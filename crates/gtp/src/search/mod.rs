@@ -154,6 +154,9 @@ pub(crate) struct Search {
     tried_points: HashSet<(i32, i32, i32)>,
     /// Grasp choices that failed for good (no pick, no approach, a carry that cannot start).
     failed_choices: HashSet<usize>,
+    /// Per grasp choice: transfers planned in vain since its last success (see
+    /// [`failure::MAX_FAILED_TRANSFERS`]).
+    failed_transfers: HashMap<usize, usize>,
     /// Per grasp choice: its pick, `None` when it cannot be picked up.
     pick_cache: HashMap<usize, Option<PickPlan>>,
     /// Per grasp choice: its motions' shared parts (built on first use).
@@ -234,6 +237,7 @@ impl Search {
             cursor: Cursor::default(),
             tried_points: HashSet::new(),
             failed_choices: HashSet::new(),
+            failed_transfers: HashMap::new(),
             pick_cache: HashMap::new(),
             motions: HashMap::new(),
             verdicts: HashMap::new(),

@@ -114,6 +114,21 @@ impl Search {
         }
     }
 
+    /// The drive from where the base stands to `goal` `(x, y, yaw)` as a solution (the way
+    /// back of a base move), or why there is none.
+    pub(super) fn drive_to(&mut self, goal: [f32; 3]) -> Result<Solution, Failure> {
+        let checker = self.base_checker()?;
+        let start = self.base_start();
+        let base = geometry::world::base_pose(goal[0], goal[1], goal[2]);
+        let path = self.base_path(&checker, &start, goal).map_err(|e| {
+            Failure::at(
+                Stage::Trajectory,
+                format!("no collision-free drive back: {e}"),
+            )
+        })?;
+        Ok(self.navigation_solution(&start, base, goal, path))
+    }
+
     /// Base positions around the target's footprint, facing it, nearest the current base
     /// first; but the robot's station (its base in the scene file) before them all: going back
     /// to a piece of furniture takes the robot back to where it works (m9's NAVTO(desk)). A
@@ -232,6 +247,7 @@ impl Search {
             visibility: None,
             reach_effort: None,
             robot_base: Some(goal),
+            base_move: None,
             trajectories: vec![traj],
             stats: self.stats,
         };

@@ -271,6 +271,7 @@ impl Search {
                 // In the hand: reached at level 0 now.
                 reach_effort: Some(0),
                 robot_base: None,
+                base_move: None,
                 trajectories,
                 stats: self.stats,
             },

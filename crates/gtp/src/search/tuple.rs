@@ -457,6 +457,7 @@ impl Search {
             visibility,
             reach_effort,
             robot_base: None,
+            base_move: None,
             trajectories,
             stats: self.stats,
         };
