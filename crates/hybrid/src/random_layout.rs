@@ -50,13 +50,15 @@ const PERSON_DRAWS: usize = 200;
 /// Rounds of re-placing the objects the robot cannot pick.
 const PICK_ROUNDS: usize = 6;
 /// Counter-top points (5 cm apart) both the person and the robot must reach.
-pub const SHARED_PATCH_POINTS: usize = 6;
+pub const SHARED_PATCH_POINTS: usize = 25;
 /// An object's footprint is this far inside its surface's edge (metres).
 const EDGE_MARGIN: f32 = 0.01;
 /// Clearance between footprints on a surface (metres).
 const CLEARANCE: f32 = 0.02;
 /// A person keeps this far from the robot's body and the furniture (metres).
 const PERSON_CLEARANCE: f32 = 0.05;
+/// Base poses `navigate-to` must each let the robot pick an object the domain drives to.
+const NAVIGATE_POSES: usize = 3;
 /// Time limit of one GTP check (pick, navigate-to).
 const CHECK_LIMIT: Duration = Duration::from_secs(20);
 
@@ -294,9 +296,12 @@ impl RandomLayouts {
             return Err("the scene has no support surface".into());
         }
         let faces: &[(&str, [f32; 2])] = match w.object(id).kind {
-            geometry::scene::ShapeKind::Box { .. } => &BOX_FACES,
-            _ => &[("upright", [0.0, 0.0])],
+            geometry::scene::ShapeKind::Box { half_extents } if book_like(half_extents) => {
+                &BOX_FACES
+            }
+            _ => &[("as-in-scene", [0.0, 0.0])],
         };
+        let start = self.world.object_pose(id).rotation;
         let robot = robot_of(w)?;
         let level = if self.rules.driven_to.contains(&name) {
             geometry::effort::MAX_EFFORT
@@ -311,7 +316,11 @@ impl RandomLayouts {
             let s = all[rng.usize(..all.len())];
             let (face, [roll, pitch]) = faces[rng.usize(..faces.len())];
             let yaw = rng.f32() * std::f32::consts::TAU;
-            let rotation = pose_from_xyz_rpy([0.0; 3], [roll, pitch, yaw]).rotation;
+            let rotation = if face == "as-in-scene" {
+                parry3d::math::Rotation::from_rotation_z(yaw) * start
+            } else {
+                pose_from_xyz_rpy([0.0; 3], [roll, pitch, yaw]).rotation
+            };
             w.set_object_pose(id, Pose::from_parts(Vector::ZERO, rotation));
             let local = w.object_aabb(id);
             let half = [local.half_extents().x, local.half_extents().y];
@@ -367,7 +376,8 @@ impl RandomLayouts {
     }
 
     /// Whether the robot picks `id` up in `w`: from its station, or (objects the domain drives
-    /// to) after one of the first three base poses `navigate-to` finds.
+    /// to) from each of the first [`NAVIGATE_POSES`] base poses `navigate-to` finds (the one a
+    /// plan drives to depends on its seed).
     fn picks(&self, w: &World, id: ObjectId, seed: u64) -> Result<(), String> {
         let name = w.object(id).name.clone();
         let options = CallOptions {
@@ -397,11 +407,16 @@ impl RandomLayouts {
                 .planner
                 .run(w, "navigate-to", &[&name], &options)
                 .map_err(|e| e.to_string())?;
-            for nav in stream.take(3) {
-                if pick(&nav.world).is_ok() {
-                    return Ok(());
-                }
+            let poses: Vec<World> = stream.take(NAVIGATE_POSES).map(|s| s.world).collect();
+            if poses.is_empty() {
+                return Err(format!(
+                    "the robot drives nowhere `{name}` is in reach: {why}"
+                ));
             }
+            return poses.iter().try_for_each(|from| {
+                pick(from)
+                    .map_err(|e| format!("after driving, the robot cannot pick `{name}`: {e}"))
+            });
         }
         Err(format!("the robot cannot pick `{name}` up: {why}"))
     }
@@ -615,6 +630,15 @@ impl RandomLayouts {
         }
         shared >= SHARED_PATCH_POINTS
     }
+}
+
+/// Whether a box of these half extents is thin like a book (its smallest size under 0.4 of
+/// the middle one): it may stand on its edge or end or lie flat; another box rests as the
+/// scene puts it (a POS machine is not left on its end).
+fn book_like(half: Vector) -> bool {
+    let mut v = [half.x, half.y, half.z];
+    v.sort_by(f32::total_cmp);
+    v[0] < 0.4 * v[1]
 }
 
 /// The scene's robot.

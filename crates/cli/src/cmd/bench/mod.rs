@@ -60,7 +60,8 @@ pub enum Target {
                   solved, the median and p90 run time, and each failure with the GTP task, its \
                   arguments and the constraint that stopped it, grouped by task and constraint \
                   (also in library-STRATEGY-layouts.csv and -failures.csv); `--save-scenes DIR` \
-                  writes each layout as a scene file for `htngtp plan ... --scene`."
+                  writes each layout as a scene file for `htngtp plan ... --scene`. With `--layout \
+                  random` the default strategy is geometric-first (symbolic otherwise)."
 )]
 pub struct LibraryArgs {
     /// Number of runs.
@@ -81,9 +82,11 @@ pub struct LibraryArgs {
     /// (`layout-INDEX.toml`), to plan it again with `htngtp plan ... --scene`.
     #[arg(long, value_name = "DIR")]
     pub save_scenes: Option<PathBuf>,
-    /// Backtracking strategy.
-    #[arg(long, value_enum, default_value_t = crate::cmd::plan::StrategyArg::Symbolic)]
-    pub strategy: crate::cmd::plan::StrategyArg,
+    /// Backtracking strategy [default: symbolic, the paper's, with `--layout nudge`;
+    /// geometric-first, as `bench domain`, with `--layout random`, where the first geometric
+    /// solution is more often a dead end].
+    #[arg(long, value_enum)]
+    pub strategy: Option<crate::cmd::plan::StrategyArg>,
     /// With geometric-first: other geometric solutions tried per failure.
     #[arg(long, default_value_t = 3)]
     pub geo_alternatives: usize,
@@ -178,7 +181,16 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
             .map(|s| strategy(s, args.geo_alternatives))
             .collect()
     } else {
-        vec![strategy(args.strategy, args.geo_alternatives)]
+        use crate::cmd::plan::StrategyArg as S;
+        let default = if random {
+            S::GeometricFirst
+        } else {
+            S::Symbolic
+        };
+        vec![strategy(
+            args.strategy.unwrap_or(default),
+            args.geo_alternatives,
+        )]
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -403,6 +415,7 @@ mod tests {
             Some(std::path::Path::new("scenes"))
         );
         assert_eq!(library(&[]).unwrap().layout, LayoutArg::Nudge);
+        assert!(library(&[]).unwrap().strategy.is_none());
         assert!(library(&["--layout", "shuffled"]).is_err());
         assert!(library(&["--layout", "random", "--fixed"]).is_err());
     }
