@@ -365,7 +365,7 @@ impl RandomLayouts {
             }
             BodyOwner::Object(_) => {
                 parry3d::query::intersection_test(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())
-                    .map_or(false, |i| !i.intersecting)
+                    .is_ok_and(|i| !i.intersecting)
             }
             BodyOwner::Agent(..) => {
                 parry3d::query::distance(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())

@@ -77,7 +77,7 @@ pub fn report(e: &Experiment) -> LayoutReport {
             indices,
         })
         .collect();
-    failures.sort_by(|a, b| b.runs.cmp(&a.runs));
+    failures.sort_by_key(|g| std::cmp::Reverse(g.runs));
     let laid: Vec<usize> = e
         .runs
         .iter()
