@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::oracle::TaskStats;
+use crate::random_layout::{LayoutSummary, RandomLayouts};
 use crate::run::{RunOptions, plan};
 
 /// How much the initial scene is perturbed per run.
@@ -105,6 +106,34 @@ pub struct RunRecord {
     pub tasks: BTreeMap<String, TaskStats>,
     /// Why the run's plan JSON could not be written (with `plans`).
     pub plan_file_error: Option<String>,
+    /// For a run that found no plan: the last geometric task that failed and the constraint
+    /// that stopped it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cause: Option<FailureCause>,
+    /// The random layout the run planned in (`--layout random`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layout: Option<LayoutSummary>,
+}
+
+/// Why a run found no plan: the last GTP task that found no (further) solution, its
+/// arguments, and the stage of the GTP's constraint hierarchy that stopped it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FailureCause {
+    /// The geometric task as the domain names it (`pick-and-make-accessible`).
+    pub task: String,
+    pub args: Vec<String>,
+    /// The stage ([`gtp::planner::Stage`]'s name: `pick`, `visibility`, ...), `?` when the
+    /// GTP named none.
+    pub constraint: String,
+    /// The GTP's reason in words.
+    pub message: String,
+}
+
+impl FailureCause {
+    /// `task(arg, ...)`.
+    pub fn call(&self) -> String {
+        format!("{}({})", self.task, self.args.join(", "))
+    }
 }
 
 impl RunRecord {
@@ -112,6 +141,8 @@ impl RunRecord {
     pub fn failed(index: usize, seed: u64, status: String) -> RunRecord {
         RunRecord {
             plan_file_error: None,
+            cause: None,
+            layout: None,
             index,
             seed,
             solved: false,
@@ -214,6 +245,11 @@ pub struct ExperimentOptions {
     pub run: RunOptions,
     /// Write each solved run's plan JSON here (`{strategy}-{index:03}.json`), for checking.
     pub plans: Option<std::path::PathBuf>,
+    /// Plan each run in a random layout of the scene instead of a nudged copy (`--layout
+    /// random`; the scene `world` is then unused).
+    pub layouts: Option<Arc<RandomLayouts>>,
+    /// Write each run's random layout here (`layout-{index:03}.toml`), to plan it again.
+    pub save_scenes: Option<std::path::PathBuf>,
 }
 
 /// Runs the experiment on all cores (one run per task of rayon's pool), calling `progress`
@@ -236,13 +272,19 @@ pub fn run_experiment(
         .into_par_iter()
         .map(|i| {
             let seed = options.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
-            let scene = if options.fixed {
-                world.clone()
-            } else {
-                randomize(world, &options.randomization, seed)
+            let (scene, layout) = match &options.layouts {
+                Some(layouts) => match laid_out(layouts, options, i, seed) {
+                    Ok((w, summary)) => (w, Some(summary)),
+                    Err(e) => {
+                        progress();
+                        return RunRecord::failed(i, seed, format!("error: the layout: {e}"));
+                    }
+                },
+                None if options.fixed => (world.clone(), None),
+                None => (randomize(world, &options.randomization, seed), None),
             };
             let plans = options.plans.as_deref().map(|d| (d, strategy_name));
-            let record = run_one(
+            let mut record = run_one(
                 domain,
                 problem,
                 scene,
@@ -252,6 +294,7 @@ pub fn run_experiment(
                 seed,
                 plans,
             );
+            record.layout = layout;
             progress();
             record
         })
@@ -261,6 +304,26 @@ pub fn run_experiment(
         runs,
         wall_time_s: start.elapsed().as_secs_f64(),
     }
+}
+
+/// The random layout of run `index` (seed `seed`), written to `options.save_scenes` when set.
+fn laid_out(
+    layouts: &RandomLayouts,
+    options: &ExperimentOptions,
+    index: usize,
+    seed: u64,
+) -> Result<(World, LayoutSummary), String> {
+    let layout = layouts.generate(seed)?;
+    if let Some(dir) = &options.save_scenes {
+        let path = dir.join(format!("layout-{index:03}.toml"));
+        let text = format!(
+            "# bench library --layout random: run {index}, seed {seed}.\n# {}\n{}",
+            layout.summary.line(),
+            layout.toml
+        );
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok((layout.world, layout.summary))
 }
 
 /// One run: plans `problem` in `scene` with every seed set to `seed`, and records it as run
@@ -301,8 +364,21 @@ pub fn run_one(
                 }
                 _ => None,
             };
+            let cause = (!solved).then(|| run.oracle.last_failure()).flatten().map(
+                |(task, args, message)| FailureCause {
+                    task: task.clone(),
+                    args: args.clone(),
+                    constraint: run
+                        .oracle
+                        .last_failure_stage()
+                        .map_or_else(|| "?".to_string(), |s| s.name().to_string()),
+                    message: message.clone(),
+                },
+            );
             RunRecord {
                 plan_file_error,
+                cause,
+                layout: None,
                 index,
                 seed,
                 solved,

@@ -10,6 +10,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::Vector;
 
 /// A scene's text as a TOML table, to edit before it is read.
+#[derive(Clone)]
 pub struct SceneText {
     table: toml::Table,
 }
@@ -138,10 +139,19 @@ impl SceneText {
         Ok(())
     }
 
-    /// Sets agent `name`'s base `(x, y, yaw in degrees)`.
-    pub fn set_base(&mut self, name: &str, base: [f32; 3]) -> Result<(), String> {
-        let agent = self
-            .table
+    /// Puts object `name` at `xyz` turned by `rpy` (degrees, the scene format's `rpy`).
+    pub fn set_pose(&mut self, name: &str, xyz: [f32; 3], rpy: [f32; 3]) -> Result<(), String> {
+        let o = self.object_mut(name)?;
+        let mut pose = toml::Table::new();
+        pose.insert("xyz".into(), floats(&xyz));
+        pose.insert("rpy".into(), floats(&rpy));
+        o.insert("pose".into(), toml::Value::Table(pose));
+        Ok(())
+    }
+
+    /// The agent entry named `name`.
+    fn agent_mut(&mut self, name: &str) -> Result<&mut toml::Table, String> {
+        self.table
             .get_mut("agents")
             .and_then(toml::Value::as_array_mut)
             .and_then(|a| {
@@ -149,7 +159,50 @@ impl SceneText {
                     .filter_map(toml::Value::as_table_mut)
                     .find(|o| o.get("name").and_then(toml::Value::as_str) == Some(name))
             })
-            .ok_or_else(|| format!("the scene has no agent `{name}`"))?;
+            .ok_or_else(|| format!("the scene has no agent `{name}`"))
+    }
+
+    /// Sets joint `joint` of agent `name` to `value` (its `[agents.joints]` entry).
+    pub fn set_joint(&mut self, name: &str, joint: &str, value: f32) -> Result<(), String> {
+        let agent = self.agent_mut(name)?;
+        let joints = agent
+            .entry("joints")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or_else(|| format!("agent `{name}`: joints is not a table"))?;
+        joints.insert(joint.into(), toml::Value::Float(f64::from(value)));
+        Ok(())
+    }
+
+    /// Makes the agents' `urdf` and `srdf` paths absolute, resolved from `base_dir`, so that the
+    /// text can be written to any folder and read again.
+    pub fn absolute_paths(&mut self, base_dir: &Path) {
+        let Some(agents) = self
+            .table
+            .get_mut("agents")
+            .and_then(toml::Value::as_array_mut)
+        else {
+            return;
+        };
+        for agent in agents.iter_mut().filter_map(toml::Value::as_table_mut) {
+            for key in ["urdf", "srdf"] {
+                if let Some(toml::Value::String(p)) = agent.get_mut(key) {
+                    let joined = base_dir.join(&*p);
+                    let path = std::fs::canonicalize(&joined).unwrap_or(joined);
+                    *p = path.display().to_string();
+                }
+            }
+        }
+    }
+
+    /// The scene's text (TOML), as [`SceneText::world`] reads it.
+    pub fn to_toml(&self) -> Result<String, String> {
+        toml::to_string(&self.table).map_err(|e| e.to_string())
+    }
+
+    /// Sets agent `name`'s base `(x, y, yaw in degrees)`.
+    pub fn set_base(&mut self, name: &str, base: [f32; 3]) -> Result<(), String> {
+        let agent = self.agent_mut(name)?;
         let mut b = toml::Table::new();
         for (k, v) in ["x", "y", "yaw"].iter().zip(base) {
             b.insert((*k).into(), toml::Value::Float(f64::from(v)));
@@ -160,23 +213,14 @@ impl SceneText {
 
     /// Sets agent `name`'s `sitting` flag.
     pub fn set_sitting(&mut self, name: &str, sitting: bool) -> Result<(), String> {
-        let agent = self
-            .table
-            .get_mut("agents")
-            .and_then(toml::Value::as_array_mut)
-            .and_then(|a| {
-                a.iter_mut()
-                    .filter_map(toml::Value::as_table_mut)
-                    .find(|o| o.get("name").and_then(toml::Value::as_str) == Some(name))
-            })
-            .ok_or_else(|| format!("the scene has no agent `{name}`"))?;
+        let agent = self.agent_mut(name)?;
         agent.insert("sitting".into(), toml::Value::Boolean(sitting));
         Ok(())
     }
 
     /// The world of this text; `source` names it in errors, `base_dir` resolves the URDF paths.
     pub fn world(&self, source: &str, base_dir: &Path) -> Result<World, String> {
-        let text = toml::to_string(&self.table).map_err(|e| e.to_string())?;
+        let text = self.to_toml()?;
         let scene =
             Scene::from_str(&text, source, base_dir, "generated").map_err(|e| e.to_string())?;
         World::from_scene(scene).map_err(|e| e.to_string())

@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod export;
 pub mod layout;
 pub mod oracle;
+pub mod random_layout;
 pub mod run;
 pub mod scale;
 pub mod timing;

@@ -123,6 +123,8 @@ struct Pulled {
     task: String,
     args: Vec<String>,
     failure: Option<String>,
+    /// The stage (constraint) that stopped the stream, when it ended.
+    stage: Option<gtp::planner::Stage>,
 }
 
 /// The GTP as an HTN oracle. See the module docs.
@@ -139,6 +141,8 @@ pub struct GtpOracle {
     stats: HashMap<String, TaskStats>,
     /// The last request that found no solution: task, arguments, why.
     last_failure: Option<(String, Vec<String>, String)>,
+    /// The stage (constraint) that stopped that request, when the GTP named one.
+    last_stage: Option<gtp::planner::Stage>,
     /// The HTN search's deadline, passed to every GTP call.
     deadline: Option<std::time::Instant>,
 }
@@ -166,6 +170,7 @@ impl GtpOracle {
             next_stream: 0,
             stats: HashMap::new(),
             last_failure: None,
+            last_stage: None,
             deadline: None,
         };
         let frame = oracle.frame(world);
@@ -201,6 +206,11 @@ impl GtpOracle {
     /// constraint that stopped it.
     pub fn last_failure(&self) -> Option<&(String, Vec<String>, String)> {
         self.last_failure.as_ref()
+    }
+
+    /// The stage of the GTP's search (the constraint) that stopped [`GtpOracle::last_failure`].
+    pub fn last_failure_stage(&self) -> Option<gtp::planner::Stage> {
+        self.last_stage
     }
 
     /// The shared literals of the initial world.
@@ -283,6 +293,7 @@ impl GtpOracle {
             task: stream.task.clone(),
             args: stream.args.clone(),
             failure: stream.gtp.failure().map(|f| f.to_string()),
+            stage: stream.gtp.failure().map(|f| f.stage),
         })
     }
 }
@@ -325,6 +336,7 @@ impl GeometricOracle for GtpOracle {
             task,
             args,
             failure,
+            stage,
         } = self.pull(stream.0)?;
         let t0 = Instant::now();
         let result = match solution {
@@ -370,6 +382,7 @@ impl GeometricOracle for GtpOracle {
             let why = failure.unwrap_or_else(|| "no further solution".into());
             s.last_failure = Some(why.clone());
             self.last_failure = Some((task, args, why));
+            self.last_stage = stage;
         }
         Ok(result)
     }

@@ -1,6 +1,7 @@
 //! `htngtp bench`: the paper's experiment (`library`) and how cost grows (`scale`).
 
 mod domain;
+mod layout;
 mod plot;
 mod scale;
 
@@ -43,7 +44,24 @@ pub enum Target {
                   the paper's fixed scene). Prints Table II per GTP task (mean time, success %, \
                   points, grasps, orientations, trajectory-planner calls, means per request), \
                   HTN backtracks per run, complete failures and the total time; writes CSV and \
-                  JSON. Runs in parallel on all cores."
+                  JSON. Runs in parallel on all cores.\n\n`--layout random` plans each run in a \
+                  random layout of the scene instead (issue 15 point 6), generated from the \
+                  run's seed. Sensible means: every movable object (the books, the POS machine) \
+                  on a free spot of any support surface of the room (desk, platform, POS stand, \
+                  table, every shelf level), on any face (a book on its long edge, on its short \
+                  edge or lying flat) and turned any way, 2 cm clear of the others, touching \
+                  nothing but its support; the robot can pick it up, as the GTP's pick finds: \
+                  the books from its station (the domain picks them there), the POS machine \
+                  from its station or after driving to it (method m9 drives); the member seated \
+                  on the chair moved with them along the desk (up to 0.45 m, 15 degrees) or \
+                  standing on free floor facing the desk, 5 cm clear of furniture and robot, \
+                  with a patch of the desk's top within both their reach (effort 1) and the \
+                  robot's from its station; the robot at its station. It reports the share \
+                  solved, the median and p90 run time, and each failure with the GTP task, its \
+                  arguments and the constraint that stopped it, grouped by task and constraint \
+                  (also in library-STRATEGY-layouts.csv and -failures.csv); `--save-scenes DIR` \
+                  writes each layout as a scene file for `htngtp plan ... --scene`. With `--layout \
+                  random` the default strategy is geometric-first (symbolic otherwise)."
 )]
 pub struct LibraryArgs {
     /// Number of runs.
@@ -53,11 +71,22 @@ pub struct LibraryArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Keep the initial scene fixed (the paper's setting).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "layout")]
     pub fixed: bool,
-    /// Backtracking strategy.
-    #[arg(long, value_enum, default_value_t = crate::cmd::plan::StrategyArg::Symbolic)]
-    pub strategy: crate::cmd::plan::StrategyArg,
+    /// How the scene varies per run: `nudge` (objects and the member moved by a few
+    /// centimetres) or `random` (objects anywhere sensible, the member seated or standing; see
+    /// the long help).
+    #[arg(long, value_enum, default_value_t = layout::LayoutArg::Nudge)]
+    pub layout: layout::LayoutArg,
+    /// With `--layout random`: write each run's layout as a scene file into this folder
+    /// (`layout-INDEX.toml`), to plan it again with `htngtp plan ... --scene`.
+    #[arg(long, value_name = "DIR")]
+    pub save_scenes: Option<PathBuf>,
+    /// Backtracking strategy [default: symbolic, the paper's, with `--layout nudge`;
+    /// geometric-first, as `bench domain`, with `--layout random`, where the first geometric
+    /// solution is more often a dead end].
+    #[arg(long, value_enum)]
+    pub strategy: Option<crate::cmd::plan::StrategyArg>,
     /// With geometric-first: other geometric solutions tried per failure.
     #[arg(long, default_value_t = 3)]
     pub geo_alternatives: usize,
@@ -130,6 +159,21 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
     let domain = crate::input::load_domain(&domain_path)?;
     let problem = htn::load_problem(&problem_path, &domain)?;
     let world = World::load(&scene_path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let random = args.layout == layout::LayoutArg::Random;
+    if args.save_scenes.is_some() && !random {
+        anyhow::bail!("--save-scenes needs --layout random");
+    }
+    let layouts = if random {
+        let rules = hybrid::random_layout::LayoutRules::default();
+        let l = hybrid::random_layout::RandomLayouts::new(&scene_path, rules)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Some(std::sync::Arc::new(l))
+    } else {
+        None
+    };
+    if let Some(dir) = &args.save_scenes {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let strategies: Vec<_> = if args.compare {
         use crate::cmd::plan::StrategyArg as S;
         [S::Symbolic, S::Chronological, S::GeometricFirst]
@@ -137,7 +181,16 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
             .map(|s| strategy(s, args.geo_alternatives))
             .collect()
     } else {
-        vec![strategy(args.strategy, args.geo_alternatives)]
+        use crate::cmd::plan::StrategyArg as S;
+        let default = if random {
+            S::GeometricFirst
+        } else {
+            S::Symbolic
+        };
+        vec![strategy(
+            args.strategy.unwrap_or(default),
+            args.geo_alternatives,
+        )]
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -166,6 +219,8 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
             fixed: args.fixed,
             randomization: Randomization::default(),
             plans: args.plans.clone(),
+            layouts: layouts.clone(),
+            save_scenes: args.save_scenes.clone(),
             run: RunOptions {
                 planner: PlannerOptions {
                     strategy: s,
@@ -190,8 +245,13 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
                 r.plan_file_error.as_deref().unwrap_or_default()
             );
         }
-        print_experiment(e, args.fixed);
-        write_files(e, &args.out)?;
+        let scene = match (random, args.fixed) {
+            (true, _) => "random-layout",
+            (false, true) => "fixed",
+            (false, false) => "randomized",
+        };
+        print_experiment(e, scene);
+        write_files(e, &args.out, random)?;
     }
     if results.len() > 1 {
         print_comparison(&results);
@@ -219,12 +279,11 @@ fn paper_row(task: &str) -> Option<&'static (&'static str, f64, f64, f64, f64, f
     PAPER.iter().find(|r| r.0 == key)
 }
 
-fn print_experiment(e: &Experiment, fixed: bool) {
+fn print_experiment(e: &Experiment, scene: &str) {
     println!(
-        "\n### htngtp bench library: {} runs, strategy {}, {} scene\n",
+        "\n### htngtp bench library: {} runs, strategy {}, {scene} scene\n",
         e.runs.len(),
         e.strategy,
-        if fixed { "fixed" } else { "randomized" }
     );
     println!(
         "| GTP task | time (ms) | succ % | pts | grasps | orts | calls | requests | paper: time (s) | succ % | pts | grasps | orts | calls |"
@@ -263,6 +322,10 @@ fn print_experiment(e: &Experiment, fixed: bool) {
         e.runs.iter().map(|r| r.gtp_backtracks as f64).sum::<f64>() / e.runs.len().max(1) as f64
     );
     println!("Total wall time: {:.1} s", e.wall_time_s);
+    if scene == "random-layout" {
+        layout::print(e, &layout::report(e));
+        return;
+    }
     for r in e.runs.iter().filter(|r| !r.solved).take(5) {
         println!("  run {} (seed {}): {}", r.index, r.seed, r.status);
     }
@@ -287,9 +350,15 @@ fn print_comparison(results: &[Experiment]) {
     }
 }
 
-fn write_files(e: &Experiment, dir: &std::path::Path) -> anyhow::Result<()> {
+fn write_files(e: &Experiment, dir: &std::path::Path, random: bool) -> anyhow::Result<()> {
     let base = dir.join(format!("library-{}", e.strategy));
-    let json = serde_json::json!({ "experiment": e, "table": e.table() });
+    let json = if random {
+        let report = layout::report(e);
+        layout::write_csv(e, &report, dir)?;
+        serde_json::json!({ "experiment": e, "table": e.table(), "layouts": report })
+    } else {
+        serde_json::json!({ "experiment": e, "table": e.table() })
+    };
     std::fs::write(
         base.with_extension("json"),
         serde_json::to_string_pretty(&json)?,
@@ -312,4 +381,42 @@ fn write_files(e: &Experiment, dir: &std::path::Path) -> anyhow::Result<()> {
     }
     std::fs::write(base.with_extension("csv"), csv)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::Target;
+    use super::layout::LayoutArg;
+
+    #[derive(Parser)]
+    struct Bench {
+        #[command(subcommand)]
+        target: Target,
+    }
+
+    fn library(args: &[&str]) -> Result<super::LibraryArgs, clap::Error> {
+        let argv = ["bench", "library"].iter().chain(args);
+        match Bench::try_parse_from(argv)?.target {
+            Target::Library(a) => Ok(a),
+            _ => panic!("not bench library"),
+        }
+    }
+
+    #[test]
+    fn the_layout_flag_parses() {
+        let a = library(&["--layout", "random", "--runs", "100", "--seed", "1"]).unwrap();
+        assert_eq!(a.layout, LayoutArg::Random);
+        assert_eq!((a.runs, a.seed), (100, 1));
+        let a = library(&["--layout", "random", "--save-scenes", "scenes"]).unwrap();
+        assert_eq!(
+            a.save_scenes.as_deref(),
+            Some(std::path::Path::new("scenes"))
+        );
+        assert_eq!(library(&[]).unwrap().layout, LayoutArg::Nudge);
+        assert!(library(&[]).unwrap().strategy.is_none());
+        assert!(library(&["--layout", "shuffled"]).is_err());
+        assert!(library(&["--layout", "random", "--fixed"]).is_err());
+    }
 }

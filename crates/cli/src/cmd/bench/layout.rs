@@ -1,0 +1,196 @@
+//! `bench library --layout random`: the report of the runs planned in random layouts (issue 15
+//! point 6): the share solved, run times, and the failures by GTP task and constraint.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use hybrid::experiment::{Experiment, RunRecord};
+use hybrid::scale::quantile;
+use serde::Serialize;
+
+/// How `bench library` varies the scene per run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LayoutArg {
+    /// Every movable object shifted by up to 3 cm and turned by up to 10 degrees where it
+    /// rests, every person moved by up to 5 cm and 6 degrees (the default).
+    Nudge,
+    /// A random layout per run: the books and the POS machine on random free spots of any
+    /// support surface, on any face, where the robot can pick them up (the books from its
+    /// station, the POS machine after driving to it); the member seated on the chair moved
+    /// along the desk, or standing on free floor facing it, sharing a reach patch of the desk
+    /// with the robot.
+    Random,
+}
+
+/// The failures of one (task, constraint) pair.
+#[derive(Clone, Debug, Serialize)]
+pub struct FailureGroup {
+    pub task: String,
+    pub constraint: String,
+    pub runs: usize,
+    /// The runs' indices.
+    pub indices: Vec<usize>,
+}
+
+/// The summary of a random-layout experiment.
+#[derive(Clone, Debug, Serialize)]
+pub struct LayoutReport {
+    pub runs: usize,
+    pub solved: usize,
+    pub solved_pct: f64,
+    /// Wall time of a run (failures included, at the time they stopped), seconds.
+    pub median_time_s: f64,
+    pub p90_time_s: f64,
+    /// Runs whose layout could not be generated.
+    pub layout_errors: usize,
+    /// Mean whole-layout attempts per generated layout.
+    pub mean_layout_attempts: f64,
+    pub failures: Vec<FailureGroup>,
+}
+
+/// The task and constraint of a failed run: its cause, else `-` and the start of its status
+/// (a layout error, an HTN failure with no geometric task failed).
+fn key(r: &RunRecord) -> (String, String) {
+    match &r.cause {
+        Some(c) => (c.task.clone(), c.constraint.clone()),
+        None if r.status.starts_with("error: the layout") => ("-".into(), "layout".into()),
+        None => ("-".into(), "no geometric task failed".into()),
+    }
+}
+
+/// The report of `e`'s runs.
+pub fn report(e: &Experiment) -> LayoutReport {
+    let runs = e.runs.len();
+    let solved = e.runs.iter().filter(|r| r.solved).count();
+    let mut times: Vec<f64> = e.runs.iter().map(|r| r.time_s).collect();
+    times.sort_by(f64::total_cmp);
+    let mut groups: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+    for r in e.runs.iter().filter(|r| !r.solved) {
+        groups.entry(key(r)).or_default().push(r.index);
+    }
+    let mut failures: Vec<FailureGroup> = groups
+        .into_iter()
+        .map(|((task, constraint), indices)| FailureGroup {
+            task,
+            constraint,
+            runs: indices.len(),
+            indices,
+        })
+        .collect();
+    failures.sort_by_key(|g| std::cmp::Reverse(g.runs));
+    let laid: Vec<usize> = e
+        .runs
+        .iter()
+        .filter_map(|r| r.layout.as_ref().map(|l| l.attempts))
+        .collect();
+    LayoutReport {
+        runs,
+        solved,
+        solved_pct: 100.0 * solved as f64 / runs.max(1) as f64,
+        median_time_s: quantile(&times, 0.5),
+        p90_time_s: quantile(&times, 0.9),
+        layout_errors: e
+            .runs
+            .iter()
+            .filter(|r| r.status.starts_with("error: the layout"))
+            .count(),
+        mean_layout_attempts: laid.iter().sum::<usize>() as f64 / laid.len().max(1) as f64,
+        failures,
+    }
+}
+
+/// Prints the report and every failed run with its task, constraint and layout.
+pub fn print(e: &Experiment, r: &LayoutReport) {
+    println!(
+        "\n### Random layouts ({}): {} of {} solved ({:.1} %); run time median {:.2} s, p90 {:.2} s\n",
+        e.strategy, r.solved, r.runs, r.solved_pct, r.median_time_s, r.p90_time_s
+    );
+    println!(
+        "Layouts: {:.2} attempts each on average, {} runs without a layout.",
+        r.mean_layout_attempts, r.layout_errors
+    );
+    if r.failures.is_empty() {
+        return;
+    }
+    println!("\n| GTP task | constraint | failed runs | runs |\n|---|---|---:|---|");
+    for g in &r.failures {
+        let idx: Vec<String> = g.indices.iter().map(usize::to_string).collect();
+        println!(
+            "| {} | {} | {} | {} |",
+            g.task,
+            g.constraint,
+            g.runs,
+            idx.join(" ")
+        );
+    }
+    println!();
+    for run in e.runs.iter().filter(|r| !r.solved) {
+        let what = match &run.cause {
+            Some(c) => format!("{}: {} ({})", c.call(), c.constraint, c.message),
+            None => run.status.clone(),
+        };
+        let layout = run
+            .layout
+            .as_ref()
+            .map(|l| format!(" [{}]", l.line()))
+            .unwrap_or_default();
+        println!("  run {} (seed {}): {what}{layout}", run.index, run.seed);
+    }
+}
+
+/// Writes `library-STRATEGY-layouts.csv` (one row per run) and
+/// `library-STRATEGY-failures.csv` (one row per task and constraint) into `dir`.
+pub fn write_csv(e: &Experiment, r: &LayoutReport, dir: &Path) -> anyhow::Result<()> {
+    let base = format!("library-{}", e.strategy);
+    let mut runs = String::from(
+        "index,seed,solved,time_s,htn_backtracks,gtp_backtracks,task,args,constraint,status,layout\n",
+    );
+    for run in &e.runs {
+        let (task, args, constraint) = match &run.cause {
+            Some(c) => (c.task.clone(), c.args.join(" "), c.constraint.clone()),
+            None if run.solved => Default::default(),
+            None => {
+                let (t, c) = key(run);
+                (t, String::new(), c)
+            }
+        };
+        let layout = run.layout.as_ref().map(|l| l.line()).unwrap_or_default();
+        runs.push_str(&format!(
+            "{},{},{},{:.3},{},{},{},{},{},{},{}\n",
+            run.index,
+            run.seed,
+            run.solved,
+            run.time_s,
+            run.htn_backtracks,
+            run.gtp_backtracks,
+            csv_field(&task),
+            csv_field(&args),
+            csv_field(&constraint),
+            csv_field(&run.status),
+            csv_field(&layout)
+        ));
+    }
+    std::fs::write(dir.join(format!("{base}-layouts.csv")), runs)?;
+    let mut groups = String::from("task,constraint,failed_runs,runs\n");
+    for g in &r.failures {
+        let idx: Vec<String> = g.indices.iter().map(usize::to_string).collect();
+        groups.push_str(&format!(
+            "{},{},{},{}\n",
+            csv_field(&g.task),
+            csv_field(&g.constraint),
+            g.runs,
+            idx.join(" ")
+        ));
+    }
+    std::fs::write(dir.join(format!("{base}-failures.csv")), groups)?;
+    Ok(())
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
