@@ -377,12 +377,13 @@ impl RandomLayouts {
 
     /// Whether the robot picks `id` up in `w`: from its station, or (objects the domain drives
     /// to) from each of the first [`NAVIGATE_POSES`] base poses `navigate-to` finds (the one a
-    /// plan drives to depends on its seed).
+    /// plan drives to depends on its seed). The base stays where it is (`robot-effort` 1): a
+    /// pick that needs a base move is not what the layout promises.
     fn picks(&self, w: &World, id: ObjectId, seed: u64) -> Result<(), String> {
         let name = w.object(id).name.clone();
         let options = CallOptions {
             seed,
-            constraints: Vec::new(),
+            constraints: vec![("robot-effort".into(), "1".into())],
             deadline: Some(Instant::now() + CHECK_LIMIT),
         };
         let pick = |from: &World| -> Result<(), String> {
