@@ -32,6 +32,17 @@ pub fn acceleration(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A GTP threshold override `KEY=VALUE` (`plan --gtp-set`), checked as `htngtp gtp --set`
+/// would apply it, so that a typo is refused before any search.
+pub fn gtp_setting(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected KEY=VALUE, found `{s}`"))?;
+    let (k, v) = (k.trim().to_string(), v.trim().to_string());
+    gtp::task::Constraints::defaults(gtp::task::TaskKind::Pick).set(&k, &v)?;
+    Ok((k, v))
+}
+
 /// A time limit as a `Duration` (the value passed [`seconds`]; clamped to be safe).
 pub fn duration(s: f64) -> Duration {
     Duration::from_secs_f64(s.clamp(0.0, MAX_SECONDS))

@@ -175,3 +175,35 @@ fn one_gtp_task_from_the_command_line() {
     );
     assert_eq!(unknown.status.code(), Some(3), "{}", text(&unknown.stderr));
 }
+
+/// `plan --gtp-set` takes the thresholds of `gtp --set`, checked before any search: an unknown
+/// key or a bad value is bad input (exit 3) naming the setting.
+#[test]
+fn plan_gtp_settings_are_checked_before_the_search() {
+    let files = [
+        &*library("domain.hddl"),
+        &*library("fig4.hddl"),
+        &*library("scene.toml"),
+    ];
+    for (setting, said) in [
+        ("robot-effort=9", "robot-effort"),
+        ("colour=red", "unknown constraint"),
+        ("robot-effort", "KEY=VALUE"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_htngtp"))
+            .arg("plan")
+            .args(&files[..2])
+            .arg("--scene")
+            .arg(files[2])
+            .args(["--gtp-set", setting])
+            .output()
+            .expect("htngtp runs");
+        assert_eq!(
+            out.status.code(),
+            Some(3),
+            "{setting}: {}",
+            text(&out.stderr)
+        );
+        assert!(text(&out.stderr).contains(said), "{}", text(&out.stderr));
+    }
+}

@@ -54,6 +54,11 @@ pub struct Args {
     /// shared predicates' initial facts are computed from it.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// With --scene: a threshold of every geometric task call, KEY=VALUE as `htngtp gtp --set`
+    /// takes it (repeatable); e.g. `robot-effort=1` keeps the robot's base where the domain
+    /// puts it (no base moves inside pick, place or hand-over).
+    #[arg(long, value_name = "KEY=VALUE", requires = "scene", value_parser = crate::input::gtp_setting)]
+    pub gtp_set: Vec<(String, String)>,
     /// With --scene: read the scene even when objects start inside one another (a warning
     /// then, not an error); a robot inside furniture is still refused.
     #[arg(long)]
@@ -157,6 +162,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(scene) = &args.scene {
         let oracle = hybrid::OracleConfig {
             seed: args.seed,
+            constraints: args.gtp_set.clone(),
             ..hybrid::OracleConfig::default()
         };
         let out = crate::cmd::geo::Outputs {
