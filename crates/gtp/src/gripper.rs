@@ -19,6 +19,13 @@ use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::shape::{Cuboid, Shape};
 
+/// The widest jaw opening the planner uses (metres), whatever a gripper allows: the objects of
+/// the shipped scenes are shaped for it (the PR2's 9 cm). Opened wider, the Fetch-like robot's
+/// gripper (10 cm) hits the shelf beside the POS machine it takes (`htngtp gtp
+/// domains/library/scene-fetch.toml pick pos-machine` finds no grasp). A gripper that opens
+/// less is used to its own limit.
+pub const OPENING_CAP: f32 = 0.09;
+
 /// A box of the gripper: where it sits in its link, and its half extents.
 #[derive(Clone, Debug)]
 struct LinkBox {
@@ -50,8 +57,8 @@ pub struct GripperModel {
     /// The tool frame's joints from the gripper's root (fixed ones, as a rule).
     tool_path: Vec<PathJoint>,
     links: Vec<GripperLink>,
-    /// The widest jaw opening: twice the gripper joint's upper limit (metres; 0 without a
-    /// gripper joint, a person's hand).
+    /// The widest jaw opening the planner uses: twice the gripper joint's upper limit, at most
+    /// [`OPENING_CAP`] (metres; 0 without a gripper joint, a person's hand).
     pub max_opening: f32,
     /// The finger joint's limits as an opening (`2 x` the joint's), to clamp openings to.
     opening_range: (f32, f32),
@@ -91,7 +98,7 @@ impl GripperModel {
         let mut gripper = GripperModel {
             tool_path: path(tool_link),
             links: boxes,
-            max_opening: range.1,
+            max_opening: range.1.min(OPENING_CAP),
             opening_range: range,
             key: 0,
         };
@@ -124,6 +131,11 @@ impl GripperModel {
             boxes.extend(link.boxes.iter().map(|b| (pose * b.in_link, b.cuboid)));
         }
         Gripper { boxes, opening }
+    }
+
+    /// The widest jaw opening of the model (twice the finger joint's upper limit).
+    pub fn model_opening(&self) -> f32 {
+        self.opening_range.1
     }
 
     /// A key of the gripper's dimensions: two grippers with the same key have the same boxes
@@ -344,8 +356,10 @@ pub(crate) mod tests {
     #[test]
     fn each_robot_gets_its_own_gripper() {
         let fetch = GripperModel::of_named_arm(&model("fetch"), "arm").expect("arm");
-        // The Fetch's fingers travel 0.05 m each: a 10 cm jaw opening, the PR2's 9 cm.
-        assert!((fetch.max_opening - 0.10).abs() < 1e-6);
+        // The Fetch's fingers travel 0.05 m each: a 10 cm jaw opening, the PR2's 9 cm; the
+        // planner opens either at most 9 cm.
+        assert!((fetch.model_opening() - 0.10).abs() < 1e-6);
+        assert!((fetch.max_opening - OPENING_CAP).abs() < 1e-6);
         let (_, hi) = fetch.at(0.1).bounds();
         assert!((hi.y - 0.0705).abs() < 1e-5, "{hi:?}");
         assert_ne!(fetch.key(), pr2_gripper().key());
