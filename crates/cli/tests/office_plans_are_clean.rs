@@ -4,7 +4,9 @@
 //! Beyond "solved and clean", each problem's point is asserted on the plan itself: the folder
 //! lying on the wallet is moved before the wallet; the box file blocking the deed is moved
 //! although the request never names it; what is filed ends `inside` its container; both
-//! people, seated and standing, are served.
+//! people, seated and standing, are served. The `-fetch` problems are three of them with the
+//! second robot, the one-armed Fetch-like model, in the office (`office-fetch.toml`); their plans
+//! must be made by that robot.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -20,7 +22,7 @@ fn office() -> PathBuf {
 }
 
 /// The problems with their scenes.
-const PROBLEMS: [(&str, &str); 7] = [
+const PROBLEMS: [(&str, &str); 10] = [
     ("uncover-and-hand", "office.toml"),
     ("retrieve-report", "office.toml"),
     ("serve-two", "office.toml"),
@@ -28,6 +30,9 @@ const PROBLEMS: [(&str, &str); 7] = [
     ("unblock-deed", "archive.toml"),
     ("refile-deed", "archive.toml"),
     ("post-parcel", "counter.toml"),
+    ("uncover-and-hand-fetch", "office-fetch.toml"),
+    ("serve-two-fetch", "office-fetch.toml"),
+    ("file-contract-fetch", "office-fetch.toml"),
 ];
 const STRATEGIES: [&str; 3] = ["symbolic", "chronological", "geometric-first"];
 
@@ -38,7 +43,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 /// Plans one problem (seed 1) and returns its plan JSON, read back. Every strategy must solve
-/// every problem of this domain (exit 0).
+/// every problem of this domain with seed 1 (exit 0).
 fn plan(dir: &Path, (problem, scene): (&str, &str), strategy: &str) -> (PathBuf, Value) {
     let out = dir.join(format!("{problem}.{strategy}.json"));
     let run = htngtp()
@@ -115,6 +120,9 @@ fn point_of(problem: &str, plan: &Value) -> String {
         Some(_) => String::new(),
         None => format!("expected a step `{a}` in {s:?}"),
     };
+    if let Some(same) = problem.strip_suffix("-fetch") {
+        return [point_of(same, plan), robot_is_fetch(plan)].concat();
+    }
     match problem {
         // covered-by: the folder comes off the wallet before the wallet is handed over.
         "uncover-and-hand" => before("puton folder", "give wallet visitor"),
@@ -153,6 +161,20 @@ fn point_of(problem: &str, plan: &Value) -> String {
         ]
         .concat(),
         other => format!("unknown problem {other}"),
+    }
+}
+
+/// Empty when the plan's robot is the Fetch-like model (its URDF, as the plan JSON carries it).
+fn robot_is_fetch(plan: &Value) -> String {
+    let agents = plan["scene"]["agents"].as_array().into_iter().flatten();
+    let urdfs: Vec<&str> = agents
+        .filter(|a| a["kind"] == "robot")
+        .filter_map(|a| a["urdf"].as_str())
+        .collect();
+    if urdfs.len() == 1 && urdfs[0].contains("<robot name=\"fetch\"") {
+        String::new()
+    } else {
+        "the plan's robot is not the Fetch-like model".to_string()
     }
 }
 
@@ -226,6 +248,7 @@ fn the_folder_and_the_box_file_are_what_stops_the_pick() {
     for (scene, object, obstacle) in [
         ("office.toml", "wallet", "folder"),
         ("archive.toml", "deed", "box-file"),
+        ("office-fetch.toml", "wallet", "folder"),
     ] {
         assert!(
             !pick_succeeds(&office().join(scene), object),

@@ -1,10 +1,11 @@
-//! Grasps for the PR2 parallel gripper: antipodal contact pairs inside a friction cone,
+//! Grasps for a robot's parallel gripper: antipodal contact pairs inside a friction cone,
 //! several rotations about each pair's axis, filtered for collision with the object itself,
 //! ranked and cached per object shape (`../shared/notes/geometry-facts.md` beside the checkout, section 5).
 //!
 //! A [`Grasp`] is the pose of the gripper's tool frame relative to the object, plus the jaw
-//! opening. Grasps depend only on the object's shape, so they are computed once per shape and
-//! shared by every task through a [`GraspCache`].
+//! opening. Grasps depend only on the object's shape and the gripper's ([`GripperModel`]), so
+//! they are computed once per shape and gripper and shared by every task through a
+//! [`GraspCache`].
 
 use std::collections::HashMap;
 use std::f32::consts::TAU;
@@ -16,7 +17,7 @@ use parry3d::query::Ray;
 use parry3d::shape::Shape;
 use serde::{Deserialize, Serialize};
 
-use crate::gripper::{Gripper, MAX_OPENING};
+use crate::gripper::GripperModel;
 
 /// How grasps are generated. The defaults follow the original planner.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -25,8 +26,9 @@ pub struct GraspParams {
     pub surface_samples: usize,
     /// Coulomb friction coefficient of the finger pads; contacts must lie in the cone `atan(mu)`.
     pub friction: f32,
-    /// The widest jaw opening usable for a grasp (metres).
-    pub max_opening: f32,
+    /// A cap on the jaw opening of a grasp below the gripper's own widest (metres); `None`:
+    /// the gripper's ([`GripperModel::max_opening`]).
+    pub max_opening: Option<f32>,
     /// Extra opening (metres, total) of the jaws while approaching, on top of the object's width.
     pub approach_clearance: f32,
     /// Rotations of the gripper about each contact pair's axis.
@@ -46,7 +48,7 @@ impl Default for GraspParams {
         GraspParams {
             surface_samples: 1000,
             friction: 0.3,
-            max_opening: MAX_OPENING,
+            max_opening: None,
             approach_clearance: 0.02,
             rotations: 8,
             keep: 80,
@@ -112,11 +114,18 @@ pub enum GraspError {
     NoSurface(String),
 }
 
-/// Generates the grasps of `shape` (in its own frame).
+/// Generates the grasps of `shape` (in its own frame) for `gripper`.
 ///
 /// Every kept grasp has its contacts inside the friction cone, a width within the maximum
 /// opening, and a gripper (open to [`Grasp::opening`]) clear of the object.
-pub fn generate_grasps(shape: &dyn Shape, params: &GraspParams) -> Result<GraspSet, GraspError> {
+pub fn generate_grasps(
+    shape: &dyn Shape,
+    params: &GraspParams,
+    gripper: &GripperModel,
+) -> Result<GraspSet, GraspError> {
+    let max_opening = params
+        .max_opening
+        .map_or(gripper.max_opening, |m| m.min(gripper.max_opening));
     let mut rng = fastrand::Rng::with_seed(params.seed);
     let samples = sample_surface(shape, params.surface_samples, &mut rng)?;
     let com = centre_of_mass(shape);
@@ -130,11 +139,11 @@ pub fn generate_grasps(shape: &dyn Shape, params: &GraspParams) -> Result<GraspS
         // Close the jaws along the inward normal, tilted at random inside the friction cone.
         let dir = random_in_cone(-s.normal, cone * 0.8, &mut rng);
         let ray = Ray::new(s.point + dir * eps, dir);
-        let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, params.max_opening, false) else {
+        let Some(hit) = shape.cast_local_ray_and_get_normal(&ray, max_opening, false) else {
             continue;
         };
         let width = hit.time_of_impact + eps;
-        if width < 0.004 || width > params.max_opening {
+        if width < 0.004 || width > max_opening {
             continue;
         }
         // Leaving the solid, the outward normal points along the ray.
@@ -152,8 +161,8 @@ pub fn generate_grasps(shape: &dyn Shape, params: &GraspParams) -> Result<GraspS
         let axis = dir;
         let offset = com - centre;
         let score = (offset - axis * offset.dot(axis)).length();
-        let opening = (width + params.approach_clearance).min(params.max_opening);
-        let gripper = Gripper::new(opening);
+        let opening = (width + params.approach_clearance).min(max_opening);
+        let boxes = gripper.at(opening);
         let u = any_perpendicular(axis);
         let w = axis.cross(u);
         for k in 0..params.rotations {
@@ -162,7 +171,7 @@ pub fn generate_grasps(shape: &dyn Shape, params: &GraspParams) -> Result<GraspS
             let z = x.cross(axis);
             let rotation = Rotation::from_mat3(&parry3d::math::Mat3::from_cols(x, axis, z));
             let tool = Pose::from_parts(centre, rotation.normalize());
-            if gripper.intersects(&tool, shape, &Pose::IDENTITY) {
+            if boxes.intersects(&tool, shape, &Pose::IDENTITY) {
                 colliding += 1;
                 continue;
             }
@@ -394,7 +403,8 @@ fn hash_vec(h: &mut impl Hasher, v: Vector) {
     }
 }
 
-/// Grasp sets computed once per object shape and shared (thread-safe, cheap to clone).
+/// Grasp sets computed once per object shape and gripper and shared (thread-safe, cheap to
+/// clone).
 #[derive(Clone, Debug, Default)]
 pub struct GraspCache {
     params: GraspParams,
@@ -415,9 +425,13 @@ impl GraspCache {
         &self.params
     }
 
-    /// The grasps of `shape`, generated on first request.
-    pub fn grasps(&self, shape: &dyn Shape) -> Result<Arc<GraspSet>, GraspError> {
-        let key = shape_key(shape);
+    /// The grasps of `shape` for `gripper`, generated on first request.
+    pub fn grasps(
+        &self,
+        shape: &dyn Shape,
+        gripper: &GripperModel,
+    ) -> Result<Arc<GraspSet>, GraspError> {
+        let key = shape_key(shape) ^ gripper.key().rotate_left(17);
         if let Some(set) = self
             .sets
             .lock()
@@ -426,7 +440,7 @@ impl GraspCache {
         {
             return Ok(set.clone());
         }
-        let set = Arc::new(generate_grasps(shape, &self.params)?);
+        let set = Arc::new(generate_grasps(shape, &self.params, gripper)?);
         self.sets
             .lock()
             .unwrap_or_else(|e| e.into_inner())
@@ -448,13 +462,14 @@ impl GraspCache {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gripper::tests::pr2_gripper;
     use parry3d::shape::{Cuboid, Cylinder, TriMesh};
 
     fn check_antipodal(shape: &dyn Shape, set: &GraspSet) {
         assert!(!set.grasps.is_empty());
         for (i, g) in set.grasps.iter().enumerate() {
             assert_eq!(g.id, i);
-            assert!(g.width <= MAX_OPENING && g.opening <= MAX_OPENING);
+            assert!(g.width <= 0.09 && g.opening <= 0.09);
             assert!(g.opening >= g.width);
             // The contacts lie on the surface along the tool's y axis, normals in the cone.
             let y = g.tool_in_object.rotation * Vector::Y;
@@ -464,7 +479,7 @@ mod tests {
                 let proj = shape.project_local_point(p, false);
                 assert!((proj.point - p).length() < 2e-3, "contact off the surface");
             }
-            let gripper = Gripper::new(g.opening);
+            let gripper = pr2_gripper().at(g.opening);
             assert!(!gripper.intersects(&g.tool_in_object, shape, &Pose::IDENTITY));
         }
         for w in set.grasps.windows(2) {
@@ -476,7 +491,7 @@ mod tests {
     fn book_grasps_are_across_the_thickness_near_an_edge() {
         // A book 24 x 17 x 3 cm: only its thickness fits in the jaws, and the palm stays outside.
         let book = Cuboid::new(Vector::new(0.12, 0.085, 0.015));
-        let set = generate_grasps(&book, &GraspParams::default()).unwrap();
+        let set = generate_grasps(&book, &GraspParams::default(), &pr2_gripper()).unwrap();
         check_antipodal(&book, &set);
         assert!(set.grasps.len() >= 20, "only {} grasps", set.grasps.len());
         for g in &set.grasps {
@@ -496,7 +511,7 @@ mod tests {
     #[test]
     fn cylinder_and_mesh_grasps() {
         let can = Cylinder::new(0.06, 0.03);
-        let set = generate_grasps(&can, &GraspParams::default()).unwrap();
+        let set = generate_grasps(&can, &GraspParams::default(), &pr2_gripper()).unwrap();
         check_antipodal(&can, &set);
         assert_eq!(set.grasps.len(), 80);
 
@@ -504,7 +519,7 @@ mod tests {
         let c = Cuboid::new(Vector::splat(0.03));
         let (v, i) = c.to_trimesh();
         let mesh = TriMesh::new(v, i).unwrap();
-        let set = generate_grasps(&mesh, &GraspParams::default()).unwrap();
+        let set = generate_grasps(&mesh, &GraspParams::default(), &pr2_gripper()).unwrap();
         check_antipodal(&mesh, &set);
         assert!(set.grasps.len() >= 40);
     }
@@ -512,7 +527,7 @@ mod tests {
     #[test]
     fn too_wide_objects_have_no_grasps() {
         let crate_box = Cuboid::new(Vector::splat(0.2));
-        let set = generate_grasps(&crate_box, &GraspParams::default()).unwrap();
+        let set = generate_grasps(&crate_box, &GraspParams::default(), &pr2_gripper()).unwrap();
         assert!(set.grasps.is_empty());
         assert_eq!(set.antipodal_pairs, 0);
     }
@@ -520,14 +535,21 @@ mod tests {
     #[test]
     fn cache_generates_once_per_shape() {
         let cache = GraspCache::new(GraspParams::default());
-        let a = cache
-            .grasps(&Cuboid::new(Vector::new(0.12, 0.085, 0.015)))
-            .unwrap();
-        let b = cache
-            .grasps(&Cuboid::new(Vector::new(0.12, 0.085, 0.015)))
-            .unwrap();
+        let g = pr2_gripper();
+        let book = Cuboid::new(Vector::new(0.12, 0.085, 0.015));
+        let a = cache.grasps(&book, &g).unwrap();
+        let b = cache.grasps(&book, &g).unwrap();
         assert!(Arc::ptr_eq(&a, &b));
-        cache.grasps(&Cylinder::new(0.06, 0.03)).unwrap();
+        cache.grasps(&Cylinder::new(0.06, 0.03), &g).unwrap();
         assert_eq!(cache.len(), 2);
+        // Another gripper has grasp sets of its own.
+        let fetch = crate::gripper::GripperModel::of_named_arm(
+            &crate::gripper::tests::model("fetch"),
+            "arm",
+        )
+        .unwrap();
+        let c = cache.grasps(&book, &fetch).unwrap();
+        assert!(!Arc::ptr_eq(&a, &c));
+        assert_eq!(cache.len(), 3);
     }
 }

@@ -1,18 +1,260 @@
-//! The PR2 parallel gripper as collision boxes in its tool frame.
+//! A robot's gripper as collision boxes in its tool frame, for the planner's cheap pre-checks
+//! (a grasp against its object, the gripper at a placement, on an approach or a retreat) before
+//! any inverse kinematics.
+//!
+//! The boxes come from the robot's own model ([`GripperModel::of_arm`]): the collision shapes of
+//! the links of the arm's SRDF end effector (the links of its group's joints and the link they
+//! hang from: the palm and the fingers), each as its oriented bounding box, placed in the tool
+//! frame by the URDF's joints with the fingers where a jaw opening puts them (each finger's
+//! joint at half the opening, as [`crate::robot::set_opening`] drives it). A box shape is its own
+//! box; other shapes are boxed, which only widens the pre-check.
 //!
 //! Convention (a gripper tool frame as ROS robots define it): x points forward out of the palm (the
 //! approach direction), y is the axis along which the two fingers close, z completes the frame.
-//! The tool frame sits between the fingertips, 0.18 m ahead of the palm frame
-//! (`../shared/notes/geometry-facts.md` beside the checkout, section 1).
 
+use std::hash::{Hash, Hasher};
+
+use geometry::agent::{AgentModel, Joint};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::shape::{Cuboid, Shape};
 
-/// Distance from the palm frame (wrist roll link) to the tool frame along x.
-pub const PALM_TO_TOOL: f32 = 0.18;
-/// The widest jaw opening of the PR2 gripper (metres).
-pub const MAX_OPENING: f32 = 0.09;
+/// The widest jaw opening the planner uses (metres), whatever a gripper allows: the objects of
+/// the shipped scenes are shaped for it (the PR2's 9 cm). Opened wider, the Fetch-like robot's
+/// gripper (10 cm) hits the shelf beside the POS machine it takes (`htngtp gtp
+/// domains/library/scene-fetch.toml pick pos-machine` finds no grasp). A gripper that opens
+/// less is used to its own limit.
+pub const OPENING_CAP: f32 = 0.09;
+
+/// A box of the gripper: where it sits in its link, and its half extents.
+#[derive(Clone, Debug)]
+struct LinkBox {
+    in_link: Pose,
+    cuboid: Cuboid,
+}
+
+/// How a joint between the gripper's root and one of its links takes its value from the
+/// opening: the gripper's joint (or one mimicking it) at `multiplier * opening / 2 + offset`,
+/// any other joint at its value in the model's default configuration (`multiplier` 0).
+#[derive(Clone, Debug)]
+struct PathJoint {
+    joint: Joint,
+    multiplier: f32,
+    offset: f32,
+}
+
+/// One link of the gripper with geometry: the joints from the gripper's root down to it, and
+/// its boxes.
+#[derive(Clone, Debug)]
+struct GripperLink {
+    path: Vec<PathJoint>,
+    boxes: Vec<LinkBox>,
+}
+
+/// The gripper of one arm, read from the robot's URDF and SRDF; see the module docs.
+#[derive(Clone, Debug)]
+pub struct GripperModel {
+    /// The tool frame's joints from the gripper's root (fixed ones, as a rule).
+    tool_path: Vec<PathJoint>,
+    links: Vec<GripperLink>,
+    /// The widest jaw opening the planner uses: twice the gripper joint's upper limit, at most
+    /// [`OPENING_CAP`] (metres; 0 without a gripper joint, a person's hand).
+    pub max_opening: f32,
+    /// The finger joint's limits as an opening (`2 x` the joint's), to clamp openings to.
+    opening_range: (f32, f32),
+    /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
+    /// by it).
+    key: u64,
+}
+
+impl GripperModel {
+    /// The gripper at the end of arm chain `arm` of `model`, with its tool frame at `tool_link`
+    /// and its finger joint at configuration index `dof` (none for a person's hand). The links:
+    /// those of the arm's SRDF end-effector group (its `link`s, its joints' child links with what
+    /// hangs from them) and the links its joints hang from (the palm); without an end effector,
+    /// the tool frame's nearest link with geometry and what hangs from it (a person's hand).
+    pub fn of_arm(
+        model: &AgentModel,
+        arm: &str,
+        tool_link: usize,
+        dof: Option<usize>,
+    ) -> GripperModel {
+        let links = effector_links(model, arm, tool_link);
+        let root = common_root(model, &links, tool_link);
+        let q = model.default_configuration().into_vec();
+        let path = |link: usize| joint_path(model, root, link, dof, &q);
+        let boxes = links
+            .iter()
+            .map(|&l| GripperLink {
+                path: path(l),
+                boxes: link_boxes(model, l),
+            })
+            .filter(|l| !l.boxes.is_empty())
+            .collect();
+        let range = dof.map_or((0.0, 0.0), |k| {
+            let lim = model.dof_limits()[k];
+            (2.0 * lim.lower.max(0.0), 2.0 * lim.upper.max(0.0))
+        });
+        let mut gripper = GripperModel {
+            tool_path: path(tool_link),
+            links: boxes,
+            max_opening: range.1.min(OPENING_CAP),
+            opening_range: range,
+            key: 0,
+        };
+        gripper.key = gripper.dimensions_key();
+        gripper
+    }
+
+    /// The gripper of the model's arm `arm` (an SRDF group with a chain and an end effector):
+    /// its tool frame the chain's tip, its finger joint the end effector group's first joint
+    /// that mimics none, as the planner's [`crate::robot::RobotSetup`] reads them.
+    pub fn of_named_arm(model: &AgentModel, arm: &str) -> Result<GripperModel, String> {
+        let chain = model.chain(arm).map_err(|e| e.to_string())?;
+        let sem = model.semantics();
+        let dof = sem
+            .end_effector(arm)
+            .and_then(|e| sem.group(&e.group))
+            .and_then(|g| g.joints.iter().find_map(|j| model.dof_index(j).ok()));
+        Ok(GripperModel::of_arm(model, arm, chain.tip_link, dof))
+    }
+
+    /// The boxes (in the tool frame) with the jaws `opening` metres apart, clamped to the
+    /// finger joint's range.
+    pub fn at(&self, opening: f32) -> Gripper {
+        let opening = opening.clamp(self.opening_range.0, self.opening_range.1);
+        let tool = pose_along(&self.tool_path, opening);
+        let to_tool = tool.inverse();
+        let mut boxes = Vec::new();
+        for link in &self.links {
+            let pose = to_tool * pose_along(&link.path, opening);
+            boxes.extend(link.boxes.iter().map(|b| (pose * b.in_link, b.cuboid)));
+        }
+        Gripper { boxes, opening }
+    }
+
+    /// The widest jaw opening of the model (twice the finger joint's upper limit).
+    pub fn model_opening(&self) -> f32 {
+        self.opening_range.1
+    }
+
+    /// A key of the gripper's dimensions: two grippers with the same key have the same boxes
+    /// at every opening.
+    pub fn key(&self) -> u64 {
+        self.key
+    }
+
+    fn dimensions_key(&self) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        let (lo, hi) = self.opening_range;
+        let openings = [lo, 0.5 * (lo + hi), hi];
+        for o in openings {
+            for (pose, cuboid) in self.at(o).boxes {
+                let p = pose.translation;
+                let r = pose.rotation;
+                let e = cuboid.half_extents;
+                for x in [p.x, p.y, p.z, r.x, r.y, r.z, r.w, e.x, e.y, e.z] {
+                    x.to_bits().hash(&mut h);
+                }
+            }
+            o.to_bits().hash(&mut h);
+        }
+        h.finish()
+    }
+}
+
+/// The links of the arm's gripper: see [`GripperModel::of_arm`].
+fn effector_links(model: &AgentModel, arm: &str, tool_link: usize) -> Vec<usize> {
+    let sem = model.semantics();
+    let group = sem
+        .end_effector(arm)
+        .and_then(|e| sem.group(&e.group))
+        .filter(|g| !g.joints.is_empty() || !g.links.is_empty());
+    let Some(group) = group else {
+        return model.hand_links(tool_link);
+    };
+    let mut out: Vec<usize> = group
+        .links
+        .iter()
+        .filter_map(|n| model.link_id(n).ok())
+        .collect();
+    for j in group.joints.iter().filter_map(|n| model.joint_id(n)) {
+        let joint = &model.joints()[j];
+        out.push(joint.parent);
+        out.extend((0..model.links().len()).filter(|&l| model.is_descendant(l, joint.child)));
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The nearest link above every gripper link and the tool frame (the palm, as a rule).
+fn common_root(model: &AgentModel, links: &[usize], tool_link: usize) -> usize {
+    let mut root = tool_link;
+    loop {
+        if links.iter().all(|&l| model.is_descendant(l, root)) {
+            return root;
+        }
+        match model.links()[root].parent {
+            Some(p) => root = p,
+            None => return root,
+        }
+    }
+}
+
+/// The joints from `root` down to `link`, each with how the opening sets its value.
+fn joint_path(
+    model: &AgentModel,
+    root: usize,
+    link: usize,
+    dof: Option<usize>,
+    q: &[f32],
+) -> Vec<PathJoint> {
+    let mut path = Vec::new();
+    let mut at = link;
+    while at != root {
+        let Some(j) = model.links()[at].parent_joint else {
+            break;
+        };
+        let joint = &model.joints()[j];
+        let master = joint.mimic.map(|m| (model.joints()[m.master].dof, m));
+        let (multiplier, offset) = match (joint.dof, master) {
+            (Some(d), _) if Some(d) == dof => (1.0, 0.0),
+            (_, Some((Some(d), m))) if Some(d) == dof => (m.multiplier, m.offset),
+            _ => (0.0, model.joint_value(j, q)),
+        };
+        path.push(PathJoint {
+            joint: joint.clone(),
+            multiplier,
+            offset,
+        });
+        at = joint.parent;
+    }
+    path.reverse();
+    path
+}
+
+/// The link's collision shapes as boxes in its frame.
+fn link_boxes(model: &AgentModel, link: usize) -> Vec<LinkBox> {
+    model.links()[link]
+        .collisions
+        .iter()
+        .map(|c| {
+            let aabb = c.shape.compute_local_aabb();
+            LinkBox {
+                in_link: c.local_pose * Pose::from_translation(aabb.center()),
+                cuboid: Cuboid::new(aabb.half_extents()),
+            }
+        })
+        .collect()
+}
+
+/// The pose a joint path puts its link at (in the path's root frame) for a jaw opening.
+fn pose_along(path: &[PathJoint], opening: f32) -> Pose {
+    path.iter().fold(Pose::IDENTITY, |pose, p| {
+        pose * p.joint.transform(p.multiplier * opening / 2.0 + p.offset)
+    })
+}
 
 /// The gripper's collision boxes for one jaw opening.
 #[derive(Clone, Debug)]
@@ -24,29 +266,6 @@ pub struct Gripper {
 }
 
 impl Gripper {
-    /// The palm and two fingers with the jaws `opening` metres apart (clamped to
-    /// `0 ..= MAX_OPENING`).
-    ///
-    /// Palm: the palm link's bounds `(0.029, -0.05, -0.024) .. (0.125, 0.051, 0.024)` in the palm
-    /// frame. Fingers: 0.12 long from 0.077 ahead of the palm frame, 0.02 thick along y (outside
-    /// the opening), 0.03 wide along z.
-    pub fn new(opening: f32) -> Gripper {
-        let opening = opening.clamp(0.0, MAX_OPENING);
-        let palm_min = Vector::new(0.029 - PALM_TO_TOOL, -0.05, -0.024);
-        let palm_max = Vector::new(0.125 - PALM_TO_TOOL, 0.051, 0.024);
-        let finger_x = (0.077 - PALM_TO_TOOL, 0.077 + 0.12 - PALM_TO_TOOL);
-        let (thick, wide) = (0.02, 0.03);
-        let mut boxes = vec![aabb_box(palm_min, palm_max)];
-        for side in [-1.0f32, 1.0] {
-            let inner = side * opening / 2.0;
-            let outer = side * (opening / 2.0 + thick);
-            let min = Vector::new(finger_x.0, inner.min(outer), -wide / 2.0);
-            let max = Vector::new(finger_x.1, inner.max(outer), wide / 2.0);
-            boxes.push(aabb_box(min, max));
-        }
-        Gripper { boxes, opening }
-    }
-
     /// Whether the gripper, with its tool frame at `tool` (world), intersects `shape` at `pose`.
     pub fn intersects(&self, tool: &Pose, shape: &dyn Shape, pose: &Pose) -> bool {
         self.boxes.iter().any(|(local, cuboid)| {
@@ -57,23 +276,72 @@ impl Gripper {
                 .unwrap_or(true)
         })
     }
-}
 
-fn aabb_box(min: Vector, max: Vector) -> (Pose, Cuboid) {
-    let centre = (min + max) * 0.5;
-    (
-        Pose::from_translation(centre),
-        Cuboid::new((max - min) * 0.5),
-    )
+    /// The smallest box, in the tool frame, holding every box (for tests and reports).
+    pub fn bounds(&self) -> (Vector, Vector) {
+        let mut lo = Vector::splat(f32::INFINITY);
+        let mut hi = Vector::splat(f32::NEG_INFINITY);
+        for (pose, cuboid) in &self.boxes {
+            let aabb = cuboid.compute_aabb(pose);
+            lo = lo.min(aabb.mins);
+            hi = hi.max(aabb.maxs);
+        }
+        (lo, hi)
+    }
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A shipped robot model with its SRDF (`models/NAME.urdf`, `.srdf`).
+    pub(crate) fn model(name: &str) -> AgentModel {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/");
+        AgentModel::from_urdf_file(format!("{dir}{name}.urdf"))
+            .and_then(|m| m.with_srdf_file(format!("{dir}{name}.srdf")))
+            .expect("shipped model")
+    }
+
+    /// The PR2's right gripper, read from its model.
+    pub(crate) fn pr2_gripper() -> GripperModel {
+        GripperModel::of_named_arm(&model("pr2"), "right_arm").expect("arm")
+    }
+
+    fn close(a: Vector, b: Vector) -> bool {
+        (a - b).abs().max_element() < 1e-5
+    }
+
+    #[test]
+    fn the_pr2_gripper_is_its_palm_and_two_fingers() {
+        let g = pr2_gripper();
+        assert!((g.max_opening - 0.09).abs() < 1e-6);
+        let at = g.at(0.04);
+        assert_eq!(at.boxes.len(), 3);
+        // The palm link's box (0.029 .. 0.125 ahead of the palm frame, the tool frame 0.18
+        // ahead), the fingers 0.12 long from 0.077, 2 cm thick outside the opening (and the
+        // model's 0.5 mm gap), 3 cm wide.
+        let (lo, hi) = at.bounds();
+        assert!(
+            close(lo, Vector::new(0.029 - 0.18, -0.05, -0.024)),
+            "{lo:?}"
+        );
+        assert!(close(hi, Vector::new(0.197 - 0.18, 0.05, 0.024)), "{hi:?}");
+        let finger = |side: f32| {
+            at.boxes.iter().any(|(pose, c)| {
+                let b = c.compute_aabb(pose);
+                let (inner, outer) = (side * 0.0205, side * 0.0405);
+                close(b.mins, Vector::new(0.077 - 0.18, inner.min(outer), -0.015))
+                    && close(b.maxs, Vector::new(0.197 - 0.18, inner.max(outer), 0.015))
+            })
+        };
+        assert!(finger(1.0) && finger(-1.0), "{:?}", at.boxes);
+        // Wider than the finger joint allows: clamped.
+        assert_eq!(g.at(0.5).opening, g.max_opening);
+    }
 
     #[test]
     fn fingers_sit_outside_the_opening() {
-        let g = Gripper::new(0.04);
+        let g = pr2_gripper().at(0.04);
         // A 3 cm cube between the jaws touches neither finger nor the palm.
         let cube = Cuboid::new(Vector::splat(0.015));
         assert!(!g.intersects(&Pose::IDENTITY, &cube, &Pose::IDENTITY));
@@ -83,5 +351,20 @@ mod tests {
         // Pushed back 6 cm it meets the palm even when it fits between the fingers.
         let back = Pose::from_translation(Vector::new(-0.08, 0.0, 0.0));
         assert!(g.intersects(&Pose::IDENTITY, &cube, &back));
+    }
+
+    #[test]
+    fn each_robot_gets_its_own_gripper() {
+        let fetch = GripperModel::of_named_arm(&model("fetch"), "arm").expect("arm");
+        // The Fetch's fingers travel 0.05 m each: a 10 cm jaw opening, the PR2's 9 cm; the
+        // planner opens either at most 9 cm.
+        assert!((fetch.model_opening() - 0.10).abs() < 1e-6);
+        assert!((fetch.max_opening - OPENING_CAP).abs() < 1e-6);
+        let (_, hi) = fetch.at(0.1).bounds();
+        assert!((hi.y - 0.0705).abs() < 1e-5, "{hi:?}");
+        assert_ne!(fetch.key(), pr2_gripper().key());
+        // The PR2's two grippers are the same (one grasp set serves both).
+        let left = GripperModel::of_named_arm(&model("pr2"), "left_arm").expect("arm");
+        assert_eq!(left.key(), pr2_gripper().key());
     }
 }

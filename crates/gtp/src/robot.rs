@@ -15,6 +15,7 @@ use geometry::scene::{AgentId, AgentKind, ObjectId};
 use geometry::world::{Attachment, World};
 use parry3d::math::{Pose, Vector};
 
+use crate::gripper::GripperModel;
 use crate::rrt::{self, JointPath, JointSpace, RrtParams};
 use crate::solution::HeldRecord;
 
@@ -32,6 +33,8 @@ pub struct Arm {
     /// The configuration index of the gripper's finger joint (each finger's travel: half the
     /// jaw opening), if the model has one.
     pub gripper_dof: Option<usize>,
+    /// The gripper's boxes, from the robot's model, for the cheap pre-checks.
+    pub gripper: GripperModel,
     /// Joint space of the chain's movable joints.
     pub space: JointSpace,
     /// Names of those joints.
@@ -177,7 +180,9 @@ impl RobotSetup {
             } else {
                 (0.0, f32::INFINITY)
             };
+            let gripper = GripperModel::of_arm(&model, &name, tool_link, gripper_dof);
             arms.push(Arm {
+                gripper,
                 wrist_to_tool,
                 wrist_reach,
                 name,

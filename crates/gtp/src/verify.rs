@@ -11,7 +11,6 @@ use geometry::scene::{AgentId, ObjectId};
 use geometry::world::World;
 use parry3d::math::Pose;
 
-use crate::gripper::Gripper;
 use crate::planner::Planner;
 use crate::robot::{self, Arm, RobotSetup, set_arm_values, set_opening};
 use crate::rrt::{JointPath, JointSpace};
@@ -207,7 +206,7 @@ fn recheck_arm(
         }
         _ => None,
     };
-    let gripper = Gripper::new(t.gripper_opening);
+    let gripper = arm.gripper.at(t.gripper_opening);
     let path = JointPath {
         waypoints: t.waypoints.clone(),
     };

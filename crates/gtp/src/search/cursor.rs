@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use parry3d::math::Vector;
 
-use crate::gripper;
 use crate::planner::Solution;
 use crate::task::TaskKind;
 
@@ -172,7 +171,12 @@ impl Search {
                     "`{}` has no grasp for the gripper (too wide for a {:.0} mm jaw opening, \
                      or every grasp collides with the object)",
                     self.object_name(),
-                    gripper::MAX_OPENING * 1000.0
+                    self.setup
+                        .arms
+                        .iter()
+                        .map(|a| a.gripper.max_opening)
+                        .fold(0.0f32, f32::max)
+                        * 1000.0
                 ),
             ));
         }

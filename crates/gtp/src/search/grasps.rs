@@ -10,7 +10,7 @@ use parry3d::math::{Pose, Vector};
 use parry3d::shape::{Cuboid, Shape};
 
 use crate::grasp::Grasp;
-use crate::gripper::{self, Gripper};
+use crate::gripper::GripperModel;
 use crate::planner::{PlannerConfig, Task};
 use crate::robot::{self, RobotSetup};
 use crate::task::TaskKind;
@@ -68,10 +68,6 @@ impl GraspChoices {
                 .push(held_choice(setup, world, o, att.link, att.grasp)?);
             out.held = true;
         } else if task.kind != TaskKind::NavigateTo && task.kind != TaskKind::Take {
-            let set = cfg
-                .grasps
-                .grasps(&*model.shape)
-                .map_err(|e| e.to_string())?;
             for (ai, a) in setup.arms.iter().enumerate() {
                 // A gripper already holding something cannot grasp the object.
                 if let Some((other, ..)) =
@@ -81,6 +77,10 @@ impl GraspChoices {
                         .push(format!("{} holds `{}`", a.name, world.object(other).name));
                     continue;
                 }
+                let set = cfg
+                    .grasps
+                    .grasps(&*model.shape, &a.gripper)
+                    .map_err(|e| e.to_string())?;
                 for g in &set.grasps {
                     out.choices.push(Choice {
                         arm: ai,
@@ -120,14 +120,15 @@ fn held_choice(
     // for the boxes' axis-aligned grasps) is the grasp's width.
     let close = (tool_in_object.rotation * Vector::Y).abs();
     let h = model.local_aabb.half_extents();
-    let width = (2.0 * close.dot(h)).min(gripper::MAX_OPENING);
+    let max_opening = setup.arms[arm].gripper.max_opening;
+    let width = (2.0 * close.dot(h)).min(max_opening);
     Ok(Choice {
         arm,
         grasp: Grasp {
             id: usize::MAX,
             tool_in_object,
             width,
-            opening: (width + 0.02).min(gripper::MAX_OPENING),
+            opening: (width + 0.02).min(max_opening),
             score: 0.0,
         },
         tool_in_object,
@@ -159,14 +160,15 @@ fn touching(a: &dyn Shape, pa: &Pose, b: &dyn Shape, pb: &Pose) -> bool {
         .unwrap_or(true)
 }
 
-/// The first obstacle (its name) that the gripper's boxes, open by `opening`, hit with the
+/// The first obstacle (its name) that the `gripper`'s boxes, open by `opening`, hit with the
 /// tool frame at `tool`; `None` when they are free.
 pub(super) fn gripper_hits(
+    gripper: &GripperModel,
     tool: &Pose,
     opening: f32,
     obstacles: &StaticObstacles,
 ) -> Option<String> {
-    let g = Gripper::new(opening);
+    let g = gripper.at(opening);
     for (local, cuboid) in &g.boxes {
         let pose = *tool * *local;
         let aabb = cuboid.compute_aabb(&pose);
@@ -212,8 +214,13 @@ impl Search {
             }
             let tool = orient.pose * ch.tool_in_object;
             if arm.may_reach(shoulder, &tool)
-                && gripper_hits(&tool, ch.grasp.width, &self.obstacles.workspace_but_object)
-                    .is_none()
+                && gripper_hits(
+                    &arm.gripper,
+                    &tool,
+                    ch.grasp.width,
+                    &self.obstacles.workspace_but_object,
+                )
+                .is_none()
             {
                 return true;
             }

@@ -11,7 +11,6 @@ use geometry::scene::ObjectId;
 use parry3d::math::Pose;
 use parry3d::shape::SharedShape;
 
-use crate::gripper::Gripper;
 use crate::robot::{self, Arm, ArmMotion, RobotSetup, set_opening};
 use crate::rrt::JointPath;
 use crate::solution::{HeldRecord, Phase, Trajectory};
@@ -186,7 +185,7 @@ pub(super) fn straddles<'a>(
     shape: SharedShape,
     pose: Pose,
 ) -> impl Fn(&[f32]) -> bool + 'a {
-    let gripper = Gripper::new(opening);
+    let gripper = motion.arm.gripper.at(opening);
     move |qa: &[f32]| !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
 }
 

@@ -66,7 +66,9 @@ impl Search {
                 tool.rotation * Vector::X
             );
         }
+        let gripper = &self.setup.arms[ch.arm].gripper;
         if let Some(n) = gripper_hits(
+            gripper,
             &tool,
             ch.grasp.opening,
             &self.obstacles.workspace_but_object,
@@ -78,7 +80,7 @@ impl Search {
         }
         let back = tool.rotation * Vector::X * (-self.c.approach);
         let pre = Pose::from_parts(tool.translation + back, tool.rotation);
-        if let Some(n) = gripper_hits(&pre, ch.grasp.opening, &self.obstacles.workspace) {
+        if let Some(n) = gripper_hits(gripper, &pre, ch.grasp.opening, &self.obstacles.workspace) {
             self.reject(Stage::Pick, || {
                 format!("no approach to `{oname}` is free: the gripper hits `{n}`")
             });

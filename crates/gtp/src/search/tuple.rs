@@ -59,7 +59,7 @@ impl Search {
         }
         let ch = self.choices[t.grasp];
         let tool = t.orientation.pose * ch.tool_in_object;
-        if !self.gripper_fits_placement(ch.grasp.width, ch.grasp.opening, tool) {
+        if !self.gripper_fits_placement(ch.arm, ch.grasp.width, ch.grasp.opening, tool) {
             return None;
         }
         // For a placement, the world after the task does not depend on the grasp (the arm
@@ -154,10 +154,12 @@ impl Search {
     /// at `tool`: around the object at the placement, and for a placing task where the descent
     /// starts, holding the object, and where the retreat ends, open (the straight moves would
     /// fail there, after an inverse kinematics each).
-    fn gripper_fits_placement(&mut self, width: f32, opening: f32, tool: Pose) -> bool {
+    fn gripper_fits_placement(&mut self, arm: usize, width: f32, opening: f32, tool: Pose) -> bool {
         let oname = self.object_name();
+        let setup = self.setup.clone();
+        let gripper = &setup.arms[arm].gripper;
         let obstacles = self.obstacles.workspace_but_object.clone();
-        if let Some(n) = gripper_hits(&tool, width, &obstacles) {
+        if let Some(n) = gripper_hits(gripper, &tool, width, &obstacles) {
             self.reject(Stage::Gripper, || {
                 format!("the gripper holding `{oname}` hits `{n}` at every placement")
             });
@@ -167,7 +169,7 @@ impl Search {
             return true;
         }
         let above = Pose::from_parts(tool.translation + Vector::Z * self.c.lift, tool.rotation);
-        if let Some(n) = gripper_hits(&above, width, &obstacles) {
+        if let Some(n) = gripper_hits(gripper, &above, width, &obstacles) {
             self.reject(Stage::Gripper, || {
                 format!("the gripper holding `{oname}` hits `{n}` above every placement")
             });
@@ -175,7 +177,7 @@ impl Search {
         }
         let back = tool.rotation * Vector::X * (-self.c.approach);
         let away = Pose::from_parts(tool.translation + back, tool.rotation);
-        if let Some(n) = gripper_hits(&away, opening, &obstacles) {
+        if let Some(n) = gripper_hits(gripper, &away, opening, &obstacles) {
             self.reject(Stage::Gripper, || {
                 format!(
                     "the open gripper hits `{n}` when retreating from every placement of \
