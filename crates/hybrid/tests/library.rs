@@ -25,11 +25,13 @@ fn run_with(
     constraints: &[(&str, &str)],
 ) -> Run {
     let dir = library();
-    let mut oracle = hybrid::OracleConfig::default();
-    oracle.constraints = constraints
-        .iter()
-        .map(|(k, v)| (k.to_string(), v.to_string()))
-        .collect();
+    let oracle = hybrid::OracleConfig {
+        constraints: constraints
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+        ..Default::default()
+    };
     let options = RunOptions {
         oracle,
         planner: PlannerOptions {
