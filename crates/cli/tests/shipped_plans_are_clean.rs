@@ -96,7 +96,8 @@ fn faults(json: &Path) -> Option<String> {
 }
 
 /// The trajectories of a plan JSON without a timed `joint_trajectory` (issue 16: every GS
-/// trajectory has one, with at least one point), as `step S trajectory K`.
+/// trajectory has one, with at least one point) or holding an object without its pose in some
+/// frame, as `step S trajectory K ...`.
 fn untimed(json: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(json).expect("plan JSON");
     let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
@@ -107,6 +108,13 @@ fn untimed(json: &Path) -> Vec<String> {
             let points = t["joint_trajectory"]["points"].as_array();
             if points.is_none_or(|p| p.is_empty()) {
                 out.push(format!("step {i} trajectory {k} has no timed joint points"));
+            }
+            // What a trajectory holds moves with it in every frame (a drive inside a task too).
+            let frames = t["frames"].as_array().into_iter().flatten();
+            if !t["holding"].is_null() && frames.clone().any(|f| f["held_pose"].is_null()) {
+                out.push(format!(
+                    "step {i} trajectory {k} holds an object without its pose"
+                ));
             }
         }
     }

@@ -188,13 +188,22 @@ pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptio
                 deleted = g.delete.iter().map(atom_json).collect();
                 let summary = run.oracle.solution_summary(g.solution);
                 let mut trajectories = Vec::new();
+                // The tool link of the arm that last carried an object in this step.
+                let mut held_link = None;
                 if let Some(s) = summary {
                     for t in &s.trajectories {
                         let arm = robot
                             .as_ref()
                             .filter(|r| world.agent(r.agent).name() == t.agent)
                             .and_then(|r| r.arms.iter().find(|arm| arm.name == t.arm));
-                        let cx = TrajectoryContext { arm, opts };
+                        if let (Some(a), Some(_)) = (arm, &t.held) {
+                            held_link = Some(a.tool_link);
+                        }
+                        let cx = TrajectoryContext {
+                            arm,
+                            held_link,
+                            opts,
+                        };
                         let (v, after) = trajectory_json(&world, t, &cx, &mut tracker);
                         trajectories.push(v);
                         world = after;

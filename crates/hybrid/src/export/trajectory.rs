@@ -164,6 +164,9 @@ pub struct TrajectoryContext<'a> {
     /// The robot's arm that moves, when the agent is the robot (its tool frame carries the held
     /// object; its gripper opens or closes).
     pub arm: Option<&'a gtp::robot::Arm>,
+    /// The link that holds the trajectory's held object when no arm moves (a base drive inside
+    /// a task, after the pick that took it): the tool link of the arm that last carried it.
+    pub held_link: Option<usize>,
     /// Timing settings.
     pub opts: &'a TimingOptions,
 }
@@ -196,6 +199,7 @@ pub fn trajectory_json(
         .arm
         .map(|a| a.tool_link)
         .or_else(|| attached_link(&world, agent, t))
+        .or_else(|| t.held.as_ref().and(cx.held_link))
         .or_else(|| model.chain(&t.arm).ok().map(|c| c.tip_link));
     let gripper = cx.arm.and_then(|a| a.gripper_dof).map(|k| {
         let from = world.agent_state(agent).q[k];
