@@ -155,9 +155,9 @@ pub struct SolutionSummary {
     /// The robot's base pose after the task (navigate-to changes it).
     pub robot_base: Option<[f32; 3]>,
     /// The base pose `(x, y, yaw)` the task was done from when the arm could not do it from
-    /// where the robot stood: the robot drove there (the first trajectory), did the task and
-    /// drove back (the last) when it could, else it stays there (`robot_base`). Absent (and not
-    /// in the JSON) otherwise.
+    /// where the robot stood: the robot drove there (the first trajectory), did the task and,
+    /// when it put the object down, drove back (the last) if it could; else it stays there
+    /// (`robot_base`). Absent (and not in the JSON) otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub base_move: Option<[f32; 3]>,
     /// The motions, in execution order.

@@ -4,10 +4,10 @@
 //! to poses within [`STEP_RADIUS`] (as a person turns, then steps: the effort levels 2 and 4 of
 //! `geometry::effort`, allowed by the task's `robot_effort`, 4 by default). Each pose is reached
 //! by a collision-free drive (a `navigate-to` search restricted to those poses); a solution from
-//! there is that drive, the task, and the drive back to where the robot stood when there is one
-//! (the task then leaves the robot where the domain put it: moving it for good is
-//! `navigate-to`'s job), else the robot stays where it worked (an arm held out over furniture
-//! at the station, say).
+//! there is that drive, the task, and, when the task put the object down (the hand empty), the
+//! drive back to where the robot stood if there is one (the task then leaves the robot where the
+//! domain put it: moving it for good is `navigate-to`'s job); else the robot stays where it
+//! worked (after a pick or a hand-over, with the object held out).
 
 use std::time::Duration;
 
@@ -96,7 +96,12 @@ impl BaseMoves {
             let next = self.here.as_mut().map(|(_, search)| search.next_solution());
             match next {
                 Some(Some(s)) => {
-                    let back = self.drive_back(template, &s);
+                    // Back only with the hand empty: an object held out swings wide on the
+                    // way back, and where the robot stood its arm often has no room.
+                    let back = match template.task.kind.places() {
+                        true => self.drive_back(template, &s),
+                        false => Err(Failure::at(Stage::Search, "it holds the object".into())),
+                    };
                     if let (Err(f), true) = (&back, template.cfg.trace) {
                         eprintln!("[base move] the robot stays: {f}");
                     }
