@@ -27,18 +27,9 @@ const PROBLEMS: [(&str, &str); 5] = [
 ];
 const STRATEGIES: [&str; 3] = ["symbolic", "chronological", "geometric-first"];
 
-/// The one run where a strategy other than symbolic may stop at its cap, and why: with base
-/// moves (the default), `put-on(pos-machine, pos-stand)` succeeds from the first desk pose by a
-/// step inside the task, where it failed before and made geometric-first revise the drive to
-/// the desk; from that pose no hidden placement for `put-away` exists, and the repair's three
-/// alternatives per failure no longer reach back to the drive. Chronological backtracking
-/// solves it, and so does geometric-first with the base fixed (`--gtp-set robot-effort=1`),
-/// which this test then requires.
-const CAPPED: (&str, &str, &str) = ("domain", "pos-out-of-reach", "geometric-first");
-
 /// Plans one problem and returns the plan JSON's path, or `None` when the planner stopped
-/// without a plan. Symbolic backtracking may stop (exit 2, its cap on geometric solutions), and
-/// geometric-first in the [`CAPPED`] run; the other strategies must solve every shipped problem.
+/// without a plan. Symbolic backtracking may stop (exit 2, its cap on geometric solutions);
+/// the other strategies must solve every shipped problem.
 fn plan(
     dir: &Path,
     domain: &str,
@@ -46,22 +37,8 @@ fn plan(
     strategy: &str,
     seed: u32,
 ) -> Option<PathBuf> {
-    plan_with(dir, domain, (problem, scene), strategy, seed, &[])
-}
-
-fn plan_with(
-    dir: &Path,
-    domain: &str,
-    (problem, scene): (&str, &str),
-    strategy: &str,
-    seed: u32,
-    extra: &[&str],
-) -> Option<PathBuf> {
     let lib = library();
-    let out = dir.join(format!(
-        "{domain}.{problem}.{strategy}.{seed}{}.json",
-        extra.join("")
-    ));
+    let out = dir.join(format!("{domain}.{problem}.{strategy}.{seed}.json"));
     let run = htngtp()
         .arg("plan")
         .arg(lib.join(format!("{domain}.hddl")))
@@ -72,12 +49,10 @@ fn plan_with(
         .args(["--time-limit", "120"])
         .arg("--json-out")
         .arg(&out)
-        .args(extra)
         .output()
         .expect("htngtp runs");
     let code = run.status.code();
-    let capped = (domain, problem, strategy) == CAPPED && extra.is_empty();
-    if (strategy == "symbolic" || capped) && code == Some(2) {
+    if strategy == "symbolic" && code == Some(2) {
         return None;
     }
     assert_eq!(
@@ -132,24 +107,20 @@ fn every_shipped_plan_passes_the_independent_check() {
     let dir = scratch("shipped");
     let mut checked = 0;
     let mut faulty = Vec::new();
-    let fixed_base = ["--gtp-set", "robot-effort=1"];
-    let capped_problem = PROBLEMS.iter().find(|p| p.0 == CAPPED.1).copied();
-    let runs = ["domain", "domain-compound"]
-        .into_iter()
-        .flat_map(|d| PROBLEMS.into_iter().map(move |p| (d, p)))
-        .flat_map(|(d, p)| STRATEGIES.into_iter().map(move |s| (d, p, s, &[][..])))
-        .chain(capped_problem.map(|p| (CAPPED.0, p, CAPPED.2, &fixed_base[..])));
-    for (domain, problem, strategy, extra) in runs {
-        let Some(json) = plan_with(&dir, domain, problem, strategy, 1, extra) else {
-            continue;
-        };
-        checked += 1;
-        let run = format!("{domain} {} {strategy} {}", problem.0, extra.join(" "));
-        untimed(&json)
-            .into_iter()
-            .for_each(|t| faulty.push(format!("{run}: {t}")));
-        if let Some(report) = faults(&json) {
-            faulty.push(format!("{run}:\n{report}"));
+    for domain in ["domain", "domain-compound"] {
+        for problem in PROBLEMS {
+            for strategy in STRATEGIES {
+                let Some(json) = plan(&dir, domain, problem, strategy, 1) else {
+                    continue;
+                };
+                checked += 1;
+                untimed(&json)
+                    .into_iter()
+                    .for_each(|t| faulty.push(format!("{domain} {} {strategy}: {t}", problem.0)));
+                if let Some(report) = faults(&json) {
+                    faulty.push(format!("{domain} {} {strategy}:\n{report}", problem.0));
+                }
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -209,11 +180,7 @@ fn the_runs_where_issue_11_found_faults_are_clean() {
     let dir = scratch("issue11");
     let mut faulty = Vec::new();
     for (domain, problem, strategy, seed, fault) in ISSUE_11_FAULTS {
-        // The capped run (see CAPPED) is checked as the test above requires it: base fixed.
-        let json = plan(&dir, domain, PROBLEMS[problem], strategy, seed).or_else(|| {
-            let fixed_base = ["--gtp-set", "robot-effort=1"];
-            plan_with(&dir, domain, PROBLEMS[problem], strategy, seed, &fixed_base)
-        });
+        let json = plan(&dir, domain, PROBLEMS[problem], strategy, seed);
         let json = json.unwrap_or_else(|| panic!("{domain} {problem} {strategy} {seed}: no plan"));
         if let Some(report) = faults(&json) {
             faulty.push(format!(
