@@ -107,6 +107,27 @@ impl Obstacles {
         }
     }
 
+    /// The obstacles within the workspace sphere in `world` (where a placed object settled),
+    /// with the placed object `released` also where the gripper let it go: the arm's way back
+    /// must clear both, since the plan shows the object at its release pose until the step ends.
+    fn workspace_after_release(
+        &self,
+        world: &World,
+        robot: AgentId,
+        released: (ObjectId, parry3d::math::Pose),
+    ) -> Arc<StaticObstacles> {
+        let (o, pose) = released;
+        let mut list = robot::obstacles(world, robot, &[]).obstacles().to_vec();
+        let model = world.object(o);
+        list.push(geometry::collision::Obstacle {
+            name: model.name.clone(),
+            pose: pose * model.shape_offset,
+            shape: model.shape.clone(),
+        });
+        let all = StaticObstacles::new(list);
+        Arc::new(robot::near(&all, self.sphere.0, self.sphere.1))
+    }
+
     /// The obstacles within the workspace sphere in `world` (the world after a task: a placed
     /// object is an obstacle where it is now).
     fn workspace_in(&self, world: &World, robot: AgentId) -> Arc<StaticObstacles> {

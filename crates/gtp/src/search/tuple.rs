@@ -346,8 +346,14 @@ impl Search {
         let oname = self.object_name();
         let grasp = c.tuple.grasp;
         let (from, mut trajectories) = self.carry_start(m, grasp)?;
-        // Return the arm to where it started, the object now an obstacle where it was placed.
-        let open_after = m.open(self.obstacles.workspace_in(&c.after, self.setup.agent));
+        // Return the arm to where it started, the object now an obstacle where it was released
+        // and where it settled.
+        let o = self.object?;
+        let released = (o, c.tuple.orientation.pose);
+        let obstacles =
+            self.obstacles
+                .workspace_after_release(&c.after, self.setup.agent, released);
+        let open_after = m.open(obstacles);
         self.stats.planner_calls += 1;
         let rrt = self.cfg.rrt.clone();
         let home = self.or_reject(
