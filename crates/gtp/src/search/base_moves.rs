@@ -89,8 +89,7 @@ impl BaseMoves {
     }
 
     /// The next solution from a pose nearby (the drive there, the task, the drive back), or
-    /// `None` when every
-    /// pose is tried or the time is up ([`BaseMoves::failure`] then says why).
+    /// `None` when every pose is tried or the time is up ([`BaseMoves::failure`] then says why).
     pub(crate) fn next_solution(&mut self, template: &Search) -> Option<Solution> {
         loop {
             let next = self.here.as_mut().map(|(_, search)| search.next_solution());
@@ -98,9 +97,10 @@ impl BaseMoves {
                 Some(Some(s)) => {
                     // Back only with the hand empty: an object held out swings wide on the
                     // way back, and where the robot stood its arm often has no room.
-                    let back = match template.task.kind.places() {
-                        true => self.drive_back(template, &s),
-                        false => Err(Failure::at(Stage::Search, "it holds the object".into())),
+                    let back = if template.task.kind.places() {
+                        self.drive_back(template, &s)
+                    } else {
+                        Err(Failure::at(Stage::Search, "it holds the object".into()))
                     };
                     if let (Err(f), true) = (&back, template.cfg.trace) {
                         eprintln!("[base move] the robot stays: {f}");
