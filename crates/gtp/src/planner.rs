@@ -421,9 +421,7 @@ impl SolutionStream {
     pub fn stats(&self) -> Stats {
         let mut s = self.search.stats;
         if let Some(m) = &self.base_moves {
-            let success = s.success;
             s.accumulate(&m.stats());
-            s.success = success || m.stats().success;
         }
         s
     }

@@ -12,9 +12,9 @@ use anyhow::Context;
 use geometry::world::World;
 use gtp::planner::Planner;
 use htn::model::{Domain, Problem};
-use htn::planner::{Outcome, PlannerOptions, Strategy};
+use htn::planner::Outcome;
+use hybrid::RunOptions;
 use hybrid::experiment::{Randomization, randomize};
-use hybrid::{OracleConfig, RunOptions};
 use rayon::prelude::*;
 
 use crate::exit;
@@ -80,33 +80,14 @@ struct Record {
 }
 
 pub fn run(args: DomainArgs) -> anyhow::Result<u8> {
-    if args.runs == 0 {
-        anyhow::bail!("--runs must be at least 1");
-    }
-    if let Some(i) = args.only.filter(|&i| i >= args.runs) {
-        anyhow::bail!(
-            "--only {i}: there are only {} runs (0..{})",
-            args.runs,
-            args.runs - 1
-        );
-    }
+    super::check_runs(args.runs, args.only)?;
     let domain = crate::input::load_domain(&args.dir.join("domain.hddl"))?;
     let cases = cases(&args.dir, &domain)?;
     if let Some(dir) = &args.plans {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let (strategy, name) = strategy(args.strategy, args.geo_alternatives);
-    let options = RunOptions {
-        planner: PlannerOptions {
-            strategy,
-            limits: htn::planner::Limits {
-                time: Some(crate::input::duration(args.time_limit)),
-                ..Default::default()
-            },
-            ..PlannerOptions::default()
-        },
-        oracle: OracleConfig::default(),
-    };
+    let (strategy, name) = super::strategy(args.strategy, args.geo_alternatives);
+    let options = super::run_options(strategy, args.time_limit);
     let planner = Arc::new(Planner::new());
     let start = Instant::now();
     let indices: Vec<usize> = match args.only {
@@ -132,15 +113,6 @@ pub fn run(args: DomainArgs) -> anyhow::Result<u8> {
 }
 
 /// The search strategy of `arg`, with its name.
-fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Strategy, &'static str) {
-    use crate::cmd::plan::StrategyArg as S;
-    match arg {
-        S::Symbolic => (Strategy::Symbolic, "symbolic"),
-        S::Chronological => (Strategy::Chronological, "chronological"),
-        S::GeometricFirst => (Strategy::GeometricFirst { k }, "geometric-first"),
-    }
-}
-
 /// The problems of `dir` (every `.hddl` file but those whose name starts with `domain`), in
 /// file-name order, each with the scene its leading comment names.
 fn cases(dir: &Path, domain: &Domain) -> anyhow::Result<Vec<Case>> {

@@ -135,17 +135,34 @@ fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Strategy, &'static
     }
 }
 
-fn library(args: LibraryArgs) -> anyhow::Result<u8> {
-    if args.runs == 0 {
+/// Refuses `--runs 0` and an `--only` index past the last run.
+fn check_runs(runs: usize, only: Option<usize>) -> anyhow::Result<()> {
+    if runs == 0 {
         anyhow::bail!("--runs must be at least 1");
     }
-    if let Some(i) = args.only.filter(|&i| i >= args.runs) {
-        anyhow::bail!(
-            "--only {i}: there are only {} runs (0..{})",
-            args.runs,
-            args.runs - 1
-        );
+    if let Some(i) = only.filter(|&i| i >= runs) {
+        anyhow::bail!("--only {i}: there are only {runs} runs (0..{})", runs - 1);
     }
+    Ok(())
+}
+
+/// The options of one benchmark run: `strategy`, the time limit in seconds, default oracle.
+fn run_options(strategy: Strategy, time_limit: f64) -> RunOptions {
+    RunOptions {
+        planner: PlannerOptions {
+            strategy,
+            limits: htn::planner::Limits {
+                time: Some(crate::input::duration(time_limit)),
+                ..Default::default()
+            },
+            ..PlannerOptions::default()
+        },
+        oracle: OracleConfig::default(),
+    }
+}
+
+fn library(args: LibraryArgs) -> anyhow::Result<u8> {
+    check_runs(args.runs, args.only)?;
     let dir = library_dir()?;
     let domain_path = args
         .domain
@@ -221,17 +238,7 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
             plans: args.plans.clone(),
             layouts: layouts.clone(),
             save_scenes: args.save_scenes.clone(),
-            run: RunOptions {
-                planner: PlannerOptions {
-                    strategy: s,
-                    limits: htn::planner::Limits {
-                        time: Some(crate::input::duration(args.time_limit)),
-                        ..Default::default()
-                    },
-                    ..PlannerOptions::default()
-                },
-                oracle: OracleConfig::default(),
-            },
+            run: run_options(s, args.time_limit),
         };
         let e = run_experiment(&domain, &problem, &world, &options, name, &|| bar.inc(1));
         bar.finish_and_clear();

@@ -4,9 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use htn::planner::PlannerOptions;
 use hybrid::scale::{CellSummary, ScaleOptions, ScaleRun, run_scale, summarize};
-use hybrid::{OracleConfig, RunOptions};
 
 use super::plot::{Plot, Series};
 use crate::cmd::demo::library_dir;
@@ -80,17 +78,7 @@ pub fn scale(args: ScaleArgs) -> anyhow::Result<u8> {
         runs: args.runs,
         seed: args.seed,
         jobs: args.jobs.unwrap_or_else(rayon::current_num_threads),
-        run: RunOptions {
-            planner: PlannerOptions {
-                strategy,
-                limits: htn::planner::Limits {
-                    time: Some(crate::input::duration(args.time_limit)),
-                    ..Default::default()
-                },
-                ..PlannerOptions::default()
-            },
-            oracle: OracleConfig::default(),
-        },
+        run: super::run_options(strategy, args.time_limit),
     };
     let bar = indicatif::ProgressBar::new((cells.len() * args.runs) as u64);
     bar.set_style(
