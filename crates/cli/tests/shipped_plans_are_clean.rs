@@ -212,3 +212,30 @@ fn the_demo_plan_passes_the_independent_check() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(report, None);
 }
+
+/// A random library layout (`bench library --layout random --seed 1`, run 96) in which the PR2's
+/// elbow swung 17 mm into the white book while the open gripper moved in around it: the planner
+/// then checked only the gripper's boxes against the object it straddles. Its plan must be clean.
+#[test]
+fn the_random_layout_where_the_elbow_hit_the_book_is_clean() {
+    let dir = scratch("layout96");
+    let run = htngtp()
+        .args(["bench", "library", "--layout", "random", "--runs", "100"])
+        .args(["--seed", "1", "--only", "96", "--out"])
+        .arg(dir.join("bench"))
+        .arg("--plans")
+        .arg(&dir)
+        .output()
+        .expect("htngtp runs");
+    assert_eq!(
+        run.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json = dir.join("geometric-first-096.json");
+    assert!(json.exists(), "no plan for layout 96");
+    let report = faults(&json);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(report.is_none(), "{}", report.unwrap_or_default());
+}

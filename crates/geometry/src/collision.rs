@@ -605,6 +605,27 @@ impl CollisionChecker {
         hit.map(|h| self.contact(h))
     }
 
+    /// The first collision in configuration `q` of a link outside `exempt` (link indices; a
+    /// self-collision counts unless both links are exempt), or `None`. For an open gripper
+    /// around the object it grasps: its hand may touch the object, the rest of the arm not.
+    pub fn first_collision_except(&self, q: &[f32], exempt: &[usize]) -> Option<Contact> {
+        let link = |s: usize| self.agent.shapes[s].link;
+        let counts = |h: Hit| match h {
+            Hit::Obstacle(s, _) | Hit::HeldShape(_, s) => !exempt.contains(&link(s)),
+            Hit::SelfPair(a, b) => !(exempt.contains(&link(a)) && exempt.contains(&link(b))),
+            Hit::HeldObstacle(..) | Hit::HeldPair(..) => true,
+        };
+        let mut hit = None;
+        self.check(q, |h| {
+            let found = counts(h);
+            if found {
+                hit = Some(h);
+            }
+            found
+        });
+        hit.map(|h| self.contact(h))
+    }
+
     /// Every collision in configuration `q`.
     pub fn collisions(&self, q: &[f32]) -> Vec<Contact> {
         let mut hits = Vec::new();

@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use geometry::collision::CollisionChecker;
+use geometry::collision::{CollisionChecker, Obstacle, StaticObstacles};
 use geometry::scene::{AgentId, ObjectId};
 use geometry::world::World;
 use parry3d::math::Pose;
@@ -207,6 +207,18 @@ fn recheck_arm(
         _ => None,
     };
     let gripper = arm.gripper.at(t.gripper_opening);
+    // The rest of the arm may not touch the straddled object either (only the hand is exempt).
+    let around = straddled.as_ref().map(|(shape, pose)| {
+        let object = Obstacle {
+            name: "the object it straddles".into(),
+            pose: *pose,
+            shape: shape.clone(),
+        };
+        let obstacles = Arc::new(StaticObstacles::new(vec![object]));
+        let mut c = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
+        c.set_self_collision(false);
+        (c, setup.model.hand_links(arm.tool_link))
+    });
     let path = JointPath {
         waypoints: t.waypoints.clone(),
     };
@@ -224,6 +236,11 @@ fn recheck_arm(
                     k,
                     "the gripper hits the object it straddles".into(),
                 ));
+            }
+        }
+        if let Some((checker, hand)) = &around {
+            if let Some(c) = checker.first_collision_except(&q, hand) {
+                return Err(Stop::Collision(k, c.to_string()));
             }
         }
     }

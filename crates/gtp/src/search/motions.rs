@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use geometry::collision::{HeldObject, StaticObstacles};
+use geometry::collision::{CollisionChecker, HeldObject, Obstacle, StaticObstacles};
 use geometry::scene::ObjectId;
 use parry3d::math::Pose;
 use parry3d::shape::SharedShape;
@@ -177,16 +177,36 @@ impl Search {
     }
 }
 
-/// A check on `motion`'s arm values: the gripper, open by `opening`, does not touch `shape` at
-/// `pose` (the object it straddles while it moves in or out around it).
+/// A check on `motion`'s arm values while the gripper, open by the grasp's opening, is around
+/// `m`'s object (`shape` at `pose`, left out of `motion`'s obstacles): the gripper's boxes do
+/// not touch it, nor does any other link of the robot (an elbow swinging into the object as the
+/// hand moves in, say). The hand's own links are left to the boxes.
 pub(super) fn straddles<'a>(
     motion: &'a ArmMotion<'_>,
-    opening: f32,
+    m: &GraspMotions,
     shape: SharedShape,
     pose: Pose,
 ) -> impl Fn(&[f32]) -> bool + 'a {
-    let gripper = motion.arm.gripper.at(opening);
-    move |qa: &[f32]| !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
+    let gripper = motion.arm.gripper.at(m.opening);
+    let object = Obstacle {
+        name: m.object_name.clone(),
+        pose,
+        shape: shape.clone(),
+    };
+    let mut checker = CollisionChecker::new(
+        motion.setup.self_model.clone(),
+        Arc::new(StaticObstacles::new(vec![object])),
+        motion.base,
+    );
+    checker.set_self_collision(false);
+    checker.set_fixed_joints(&motion.template, &motion.arm.chain.dofs);
+    let hand = motion.setup.model.hand_links(motion.arm.tool_link);
+    move |qa: &[f32]| {
+        !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
+            && checker
+                .first_collision_except(&motion.full(qa), &hand)
+                .is_none()
+    }
 }
 
 /// The last waypoint of `path` (a path holds at least its start).

@@ -160,7 +160,7 @@ impl Search {
         let oname = self.object_name();
         let straddle = straddles(
             open,
-            m.opening,
+            m,
             self.world.object(o).shape.clone(),
             self.world.object_shape_pose(o),
         );
@@ -168,7 +168,9 @@ impl Search {
         // takes as checked: the open gripper there must not touch the object either.
         if !straddle(qg) {
             self.reject(Stage::Pick, || {
-                format!("the open gripper touches `{oname}` at every grasp configuration")
+                format!(
+                    "the open gripper or the arm touches `{oname}` at every grasp configuration"
+                )
             });
             return None;
         }

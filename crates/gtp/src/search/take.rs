@@ -132,7 +132,7 @@ impl Search {
         let open = m.open(self.obstacles.workspace_but_object.clone());
         let straddle = straddles(
             &open,
-            m.opening,
+            m,
             world.object(o).shape.clone(),
             world.object_shape_pose(o),
         );

@@ -283,7 +283,7 @@ impl Search {
         let open = m.open(self.obstacles.workspace_but_object.clone());
         let straddle = straddles(
             &open,
-            m.opening,
+            m,
             self.world.object(o).shape.clone(),
             pose * self.world.object(o).shape_offset,
         );
