@@ -5,6 +5,7 @@
 //! `base_yaw`, at z = 0).
 
 use std::collections::BTreeMap;
+use std::f64::consts::PI;
 
 /// A rigid transform: rotation as a unit quaternion `[x, y, z, w]`, then translation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,6 +110,8 @@ struct Joint {
     motion: Motion,
     /// `(master, multiplier, offset)`.
     mimic: Option<(String, f64, f64)>,
+    /// Lower and upper limit (a continuous joint: a full turn either way).
+    limits: (f64, f64),
 }
 
 /// An agent's kinematic tree, joints ordered parents first.
@@ -166,6 +169,72 @@ impl Kinematics {
     }
 }
 
+/// The joints that turn an agent's head: from the joint above its pivot link (the pan joint)
+/// down to its eye link, as the URDF declares them.
+#[derive(Clone, Debug)]
+pub struct HeadChain {
+    /// The link the first joint hangs from (it does not move when the head turns).
+    pub root: String,
+    joints: Vec<Joint>,
+}
+
+impl Kinematics {
+    /// The head chain from the joint whose child is `pivot` down to `eye`; `None` when `eye`
+    /// does not hang below `pivot` or the chain has a mimic joint.
+    pub fn head_chain(&self, pivot: &str, eye: &str) -> Option<HeadChain> {
+        let mut joints = Vec::new();
+        let mut link = eye;
+        loop {
+            let j = self.joints.iter().find(|j| j.child == link)?;
+            if j.mimic.is_some() && j.motion != Motion::Fixed {
+                return None;
+            }
+            joints.push(j.clone());
+            if j.child == pivot {
+                break;
+            }
+            link = &j.parent;
+        }
+        joints.reverse();
+        Some(HeadChain {
+            root: joints[0].parent.clone(),
+            joints,
+        })
+    }
+}
+
+impl HeadChain {
+    /// The limits of the chain's movable joints, in chain order.
+    pub fn limits(&self) -> Vec<(f64, f64)> {
+        self.movable().map(|j| j.limits).collect()
+    }
+
+    /// The eye's pose with the movable joints at `values` (chain order) when the root link is
+    /// at `root`.
+    pub fn eye_pose(&self, root: &Iso, values: &[f64]) -> Iso {
+        let mut pose = *root;
+        let mut v = values.iter();
+        for j in &self.joints {
+            pose = pose.then(&j.origin);
+            if j.motion != Motion::Fixed {
+                let x = v.next().copied().unwrap_or(0.0);
+                pose = pose.then(&match j.motion {
+                    Motion::Turn => Iso::rotation(j.axis, x),
+                    _ => Iso {
+                        q: Iso::IDENTITY.q,
+                        t: j.axis.map(|a| a * x),
+                    },
+                });
+            }
+        }
+        pose
+    }
+
+    fn movable(&self) -> impl Iterator<Item = &Joint> {
+        self.joints.iter().filter(|j| j.motion != Motion::Fixed)
+    }
+}
+
 fn joint(j: &urdf_rs::Joint) -> Result<Joint, String> {
     let a = j.axis.xyz.0;
     let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
@@ -190,6 +259,10 @@ fn joint(j: &urdf_rs::Joint) -> Result<Joint, String> {
         origin: Iso::from_urdf(j.origin.xyz.0, j.origin.rpy.0),
         axis: a.map(|x| x / norm),
         motion,
+        limits: match j.joint_type {
+            urdf_rs::JointType::Continuous => (-PI, PI),
+            _ => (j.limit.lower, j.limit.upper),
+        },
         mimic: j.mimic.as_ref().map(|m| {
             (
                 m.joint.clone(),

@@ -9,7 +9,9 @@ use parry3d::math::{Pose, Vector};
 use parry3d::query::{Ray, RayCast};
 
 use crate::bodies::{Owner, Placed, links_at, objects_at};
+use crate::kinematics::Iso;
 use crate::model::{AgentKind, Literal, Plan, Step};
+use crate::motion::iso;
 use crate::report::{Fault, FaultKind};
 use crate::world::World;
 
@@ -113,8 +115,13 @@ fn visible(
     };
     let scene = Scene::new(plan, world, o, a, eye.translation);
     let now = scene.fraction(&Camera::of(&eye), Some(fov));
-    let pivot = agent.head_pivot.map(|l| world.agents[a][l].translation);
-    let aimed = scene.fraction(&Camera::aimed(&eye, pivot, scene.centre()), None);
+    let aimed = match head_aimed(plan, world, a, scene.centre()) {
+        Some(turned) => scene.fraction(&Camera::of(&turned), Some(fov)),
+        None => {
+            let pivot = agent.head_pivot.map(|l| world.agents[a][l].translation);
+            scene.fraction(&Camera::aimed(&eye, pivot, scene.centre()), None)
+        }
+    };
     let detail = format!(
         "visible fraction {now:.2} with the head as it is, {aimed:.2} with it turned (threshold {VISIBLE})"
     );
@@ -124,6 +131,56 @@ fn visible(
         now > VISIBLE_HIGH
     };
     Some((stale, detail))
+}
+
+/// Grid steps over each head joint's range while aiming.
+const AIM_STEPS: usize = 25;
+
+/// The eye of agent `a` with its head turned towards `target` as far as the head's joints
+/// allow (from the URDF the plan carries: the joints from its `head_pivot_link`'s down to its
+/// `eye_link`): of a grid over the joints' ranges, the pose whose forward axis points nearest
+/// the target. `None` without a URDF, a pivot or an eye, or with more than two head joints.
+fn head_aimed(plan: &Plan, world: &World, a: usize, target: Vector) -> Option<Pose> {
+    let agent = &plan.agents[a];
+    let name = |l: usize| agent.links[l].name.as_str();
+    let chain = agent
+        .kinematics
+        .as_ref()?
+        .head_chain(name(agent.head_pivot?), name(agent.eye?))?;
+    let root = agent.links.iter().position(|l| l.name == chain.root)?;
+    let root = iso(&world.agents[a][root]);
+    let limits = chain.limits();
+    if limits.is_empty() || limits.len() > 2 {
+        return None;
+    }
+    let at = |(lo, hi): (f64, f64), k: usize| lo + (hi - lo) * k as f64 / (AIM_STEPS - 1) as f64;
+    let second = if limits.len() == 2 { AIM_STEPS } else { 1 };
+    let mut best = (f64::NEG_INFINITY, Iso::IDENTITY);
+    for i in 0..AIM_STEPS {
+        for k in 0..second {
+            let mut values = vec![at(limits[0], i)];
+            values.extend(limits.get(1).map(|&l| at(l, k)));
+            let eye = chain.eye_pose(&root, &values);
+            let to = [0, 1, 2].map(|c| f64::from(target[c]) - eye.t[c]);
+            let fwd = eye.rotate([1.0, 0.0, 0.0]);
+            let norm = (to[0] * to[0] + to[1] * to[1] + to[2] * to[2])
+                .sqrt()
+                .max(1e-9);
+            let cos = (fwd[0] * to[0] + fwd[1] * to[1] + fwd[2] * to[2]) / norm;
+            if cos > best.0 {
+                best = (cos, eye);
+            }
+        }
+    }
+    Some(pose(&best.1))
+}
+
+fn pose(i: &Iso) -> Pose {
+    let [x, y, z, w] = i.q.map(|v| v as f32);
+    Pose::from_parts(
+        Vector::new(i.t[0] as f32, i.t[1] as f32, i.t[2] as f32),
+        parry3d::math::Rotation::from_xyzw(x, y, z, w).normalize(),
+    )
 }
 
 /// (stale, what was measured); `None` when the agent declares no `shoulder_links`.

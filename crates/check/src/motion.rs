@@ -255,7 +255,8 @@ fn fault(
     }
 }
 
-fn iso(p: &Pose) -> Iso {
+/// The f64 transform of a link or object pose.
+pub(crate) fn iso(p: &Pose) -> Iso {
     let (t, r) = (p.translation, p.rotation);
     Iso {
         q: [r.x, r.y, r.z, r.w].map(f64::from),

@@ -3,7 +3,7 @@
 
 mod common;
 
-use check::{FaultKind, InputError, Options};
+use check::{FaultKind, InputError, Options, Report};
 use common::*;
 use serde_json::json;
 
@@ -853,4 +853,50 @@ fn grasping_links_are_the_declared_hands() {
         err.contains("agents[0].hands[0].links[0]") && err.contains("no link `wing`"),
         "{err}"
     );
+}
+
+/// The robot with a head its URDF turns: pan about z (within `pan` either way), then tilt
+/// about y, the camera fixed below that; the book put on the bin, 90 degrees to its left, with
+/// `(visible book bot)` added. Seen only when the pan reaches that far.
+fn book_beside_a_head_that_pans(pan: f32) -> Report {
+    let mut plan = scene();
+    let bot = &mut plan["scene"]["agents"][0];
+    bot["links"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "name": "head_pan_link", "shapes": [] }));
+    bot["link_poses"]["head_pan_link"] = at(0.2, 0.0, 1.3);
+    bot["link_poses"]["camera"] = at(0.2, 0.0, 1.3);
+    bot["head_pivot_link"] = json!("head_pan_link");
+    bot["urdf"] = json!(format!(
+        r#"<robot name="bot">
+      <link name="base_link"/><link name="head_pan_link"/><link name="head_tilt_link"/><link name="camera"/>
+      <joint name="head_pan_joint" type="revolute"><parent link="base_link"/><child link="head_pan_link"/>
+        <origin xyz="0.2 0 1.1"/><axis xyz="0 0 1"/><limit lower="-{pan}" upper="{pan}" effort="1" velocity="1"/></joint>
+      <joint name="head_tilt_joint" type="revolute"><parent link="head_pan_link"/><child link="head_tilt_link"/>
+        <axis xyz="0 1 0"/><limit lower="-0.5" upper="1.2" effort="1" velocity="1"/></joint>
+      <joint name="camera_joint" type="fixed"><parent link="head_tilt_link"/><child link="camera"/></joint>
+    </robot>"#
+    ));
+    let on_bin = json!({ "book": at(0.0, 1.0, 0.22) });
+    let added = json!([["visible", "book", "bot"]]);
+    push_step(&mut plan, "place", "book", vec![], added, json!([]), on_bin);
+    check(&plan)
+}
+
+/// With the URDF at hand, "visible with the head turned" turns the head by its joints within
+/// their limits (not a free swing): a pan limited to 0.4 rad leaves the book unseen.
+#[test]
+fn a_head_turns_only_as_far_as_its_joints_allow() {
+    let stale = |r: &Report| {
+        r.faults
+            .iter()
+            .filter(|f| f.kind == FaultKind::StaleLiteral)
+            .map(|f| f.a.clone())
+            .collect::<Vec<_>>()
+    };
+    assert!(stale(&book_beside_a_head_that_pans(3.0)).is_empty());
+    let limited = book_beside_a_head_that_pans(0.4);
+    assert_eq!(stale(&limited), vec!["(visible book bot)".to_string()]);
+    assert!(limited.faults[0].detail.contains("0.00 with it turned"));
 }
