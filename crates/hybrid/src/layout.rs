@@ -7,7 +7,7 @@ use std::path::Path;
 use geometry::scene::{ObjectId, Scene};
 use geometry::world::World;
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::Vector;
+use parry3d::math::{Pose, Vector};
 
 /// A scene's text as a TOML table, to edit before it is read.
 #[derive(Clone)]
@@ -147,6 +147,14 @@ impl SceneText {
         pose.insert("rpy".into(), floats(&rpy));
         o.insert("pose".into(), toml::Value::Table(pose));
         Ok(())
+    }
+
+    /// Sets the pose of object `name` to `pose` (a world pose, written as `xyz` and `rpy`).
+    pub fn set_object_pose(&mut self, name: &str, pose: Pose) -> Result<(), String> {
+        let (yaw, pitch, roll) = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
+        let t = pose.translation;
+        let rpy = [roll, pitch, yaw].map(f32::to_degrees);
+        self.set_pose(name, [t.x, t.y, t.z], rpy)
     }
 
     /// The agent entry named `name`.

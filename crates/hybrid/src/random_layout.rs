@@ -265,14 +265,7 @@ impl RandomLayouts {
         }
         let mut summary_objects = Vec::new();
         for &id in &objects {
-            let pose = w.object_pose(id);
-            let (yaw, pitch, roll) = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
-            let t = pose.translation;
-            text.set_pose(
-                &w.object(id).name,
-                [t.x, t.y, t.z],
-                [roll.to_degrees(), pitch.to_degrees(), yaw.to_degrees()],
-            )?;
+            text.set_object_pose(&w.object(id).name, w.object_pose(id))?;
             if let Some(p) = placed.remove(&id.0) {
                 summary_objects.push(p);
             }
@@ -438,36 +431,26 @@ impl RandomLayouts {
     ) -> Result<PersonPlacement, String> {
         let name = w.agent(person).name().to_string();
         let start = w.agent_state(person).clone();
-        let chair = w
-            .agent(person)
-            .spec
-            .sitting
-            .then(|| chair_of(w, start.base));
-        let sit = chair.flatten().is_some() && rng.bool();
+        let chair = if w.agent(person).spec.sitting {
+            chair_of(w, start.base)
+        } else {
+            None
+        };
+        // Seated on the chair (when there is one) or standing, half the time each.
+        let seat = chair.filter(|_| rng.bool());
         let counter = self.counter_surface(w)?;
         for _ in 0..PERSON_DRAWS {
-            let placement = if sit {
-                let chair = chair.flatten().ok_or("no chair")?;
-                self.seat(w, person, chair, &start, rng)
-            } else {
-                self.stand(w, person, &counter, &start.q, rng)
+            let placement = match seat {
+                Some(chair) => self.seat(w, person, chair, &start, rng),
+                None => self.stand(w, person, &counter, &start.q, rng),
             };
-            if !self.person_is_free(w, person, sit.then_some(chair.flatten()).flatten())
-                || !self.serves(w, person, &counter, sit)
+            if !self.person_is_free(w, person, seat)
+                || !self.serves(w, person, &counter, seat.is_some())
             {
                 continue;
             }
-            if sit {
-                if let Some(chair) = chair.flatten() {
-                    let pose = w.object_pose(chair);
-                    let (yaw, _, _) = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
-                    let t = pose.translation;
-                    text.set_pose(
-                        &w.object(chair).name,
-                        [t.x, t.y, t.z],
-                        [0.0, 0.0, yaw.to_degrees()],
-                    )?;
-                }
+            if let Some(chair) = seat {
+                text.set_object_pose(&w.object(chair).name, w.object_pose(chair))?;
             } else {
                 text.set_sitting(&name, false)?;
                 let model = &w.agent(person).model;
@@ -479,7 +462,7 @@ impl RandomLayouts {
             text.set_base(&name, placement)?;
             return Ok(PersonPlacement {
                 name,
-                sitting: sit,
+                sitting: seat.is_some(),
                 base: placement,
             });
         }
