@@ -234,6 +234,22 @@ pub fn obstacles(world: &World, robot: AgentId, skip: &[ObjectId]) -> StaticObst
     StaticObstacles::new(list)
 }
 
+/// The check of the robot's links against the one object the open gripper of `arm` is around
+/// (`object`, out of the motion's obstacles): a checker with that object as its only obstacle
+/// (self-collision off), and the hand's links, which it leaves to the gripper's boxes (call
+/// `first_collision_except` with them).
+pub fn around_object(
+    setup: &RobotSetup,
+    arm: &Arm,
+    base: Pose,
+    object: Obstacle,
+) -> (CollisionChecker, Vec<usize>) {
+    let obstacles = Arc::new(StaticObstacles::new(vec![object]));
+    let mut checker = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
+    checker.set_self_collision(false);
+    (checker, setup.model.hand_links(arm.tool_link))
+}
+
 /// The obstacles within `radius` of `centre` (by their bounding boxes): for arm motions, the
 /// arm's workspace around the shoulders; nothing farther can touch the arm or what it holds.
 pub fn near(obstacles: &StaticObstacles, centre: Vector, radius: f32) -> StaticObstacles {

@@ -111,7 +111,7 @@ impl JointSpace {
 
 /// An angle difference folded into `[-pi, pi)`.
 #[inline]
-fn wrap(a: f32) -> f32 {
+pub(crate) fn wrap(a: f32) -> f32 {
     let s = a + PI;
     // Already in range (the common case): `rem_euclid` would return `s` itself, at the cost
     // of a floating-point remainder (the nearest-neighbour search calls this per node).

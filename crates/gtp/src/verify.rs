@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use geometry::collision::{CollisionChecker, Obstacle, StaticObstacles};
+use geometry::collision::{CollisionChecker, Obstacle};
 use geometry::scene::{AgentId, ObjectId};
 use geometry::world::World;
 use parry3d::math::Pose;
@@ -214,10 +214,7 @@ fn recheck_arm(
             pose: *pose,
             shape: shape.clone(),
         };
-        let obstacles = Arc::new(StaticObstacles::new(vec![object]));
-        let mut c = CollisionChecker::new(setup.self_model.clone(), obstacles, base);
-        c.set_self_collision(false);
-        (c, setup.model.hand_links(arm.tool_link))
+        robot::around_object(setup, arm, base, object)
     });
     let path = JointPath {
         waypoints: t.waypoints.clone(),

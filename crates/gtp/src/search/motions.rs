@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use geometry::collision::{CollisionChecker, HeldObject, Obstacle, StaticObstacles};
+use geometry::collision::{HeldObject, Obstacle, StaticObstacles};
 use geometry::scene::ObjectId;
 use parry3d::math::Pose;
 use parry3d::shape::SharedShape;
@@ -193,14 +193,8 @@ pub(super) fn straddles<'a>(
         pose,
         shape: shape.clone(),
     };
-    let mut checker = CollisionChecker::new(
-        motion.setup.self_model.clone(),
-        Arc::new(StaticObstacles::new(vec![object])),
-        motion.base,
-    );
-    checker.set_self_collision(false);
+    let (mut checker, hand) = robot::around_object(motion.setup, motion.arm, motion.base, object);
     checker.set_fixed_joints(&motion.template, &motion.arm.chain.dofs);
-    let hand = motion.setup.model.hand_links(motion.arm.tool_link);
     move |qa: &[f32]| {
         !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
             && checker

@@ -265,9 +265,7 @@ fn nearby_candidates(target: &ReachTarget, base: Pose, radius: f32) -> Vec<Vecto
     let cur = Vector::new(base.translation.x, base.translation.y, 0.0);
     let aim = target.nearest(cur) - cur;
     let facing = base.rotation * Vector::X;
-    let turn = aim.y.atan2(aim.x) - facing.y.atan2(facing.x);
-    let turn =
-        (turn + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI;
+    let turn = crate::rrt::wrap(aim.y.atan2(aim.x) - facing.y.atan2(facing.x));
     let mut out = Vec::new();
     if turn.abs() > 5f32.to_radians() {
         out.push(cur);
