@@ -540,7 +540,7 @@ impl CsvFile {
 
 /// A CSV field as RFC 4180 writes it: quoted when it holds a comma, a quote or a line break,
 /// with quotes doubled.
-fn csv_field(s: &str) -> String {
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

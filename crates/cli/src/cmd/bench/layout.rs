@@ -8,6 +8,8 @@ use hybrid::experiment::{Experiment, RunRecord};
 use hybrid::scale::quantile;
 use serde::Serialize;
 
+use crate::cmd::bench_hddl::csv_field;
+
 /// How `bench library` varies the scene per run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum LayoutArg {
@@ -48,12 +50,17 @@ pub struct LayoutReport {
     pub failures: Vec<FailureGroup>,
 }
 
+/// Whether the run had no layout (the generator gave up).
+fn layout_failed(r: &RunRecord) -> bool {
+    r.status.starts_with("error: the layout")
+}
+
 /// The task and constraint of a failed run: its cause, else `-` and the start of its status
 /// (a layout error, an HTN failure with no geometric task failed).
 fn key(r: &RunRecord) -> (String, String) {
     match &r.cause {
         Some(c) => (c.task.clone(), c.constraint.clone()),
-        None if r.status.starts_with("error: the layout") => ("-".into(), "layout".into()),
+        None if layout_failed(r) => ("-".into(), "layout".into()),
         None => ("-".into(), "no geometric task failed".into()),
     }
 }
@@ -89,11 +96,7 @@ pub fn report(e: &Experiment) -> LayoutReport {
         solved_pct: 100.0 * solved as f64 / runs.max(1) as f64,
         median_time_s: quantile(&times, 0.5),
         p90_time_s: quantile(&times, 0.9),
-        layout_errors: e
-            .runs
-            .iter()
-            .filter(|r| r.status.starts_with("error: the layout"))
-            .count(),
+        layout_errors: e.runs.iter().filter(|r| layout_failed(r)).count(),
         mean_layout_attempts: laid.iter().sum::<usize>() as f64 / laid.len().max(1) as f64,
         failures,
     }
@@ -184,13 +187,4 @@ pub fn write_csv(e: &Experiment, r: &LayoutReport, dir: &Path) -> anyhow::Result
     }
     std::fs::write(dir.join(format!("{base}-failures.csv")), groups)?;
     Ok(())
-}
-
-/// A CSV field, quoted when it holds a comma, a quote or a line break.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
 }
