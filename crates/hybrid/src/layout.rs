@@ -139,22 +139,18 @@ impl SceneText {
         Ok(())
     }
 
-    /// Puts object `name` at `xyz` turned by `rpy` (degrees, the scene format's `rpy`).
-    pub fn set_pose(&mut self, name: &str, xyz: [f32; 3], rpy: [f32; 3]) -> Result<(), String> {
-        let o = self.object_mut(name)?;
-        let mut pose = toml::Table::new();
-        pose.insert("xyz".into(), floats(&xyz));
-        pose.insert("rpy".into(), floats(&rpy));
-        o.insert("pose".into(), toml::Value::Table(pose));
-        Ok(())
-    }
-
-    /// Sets the pose of object `name` to `pose` (a world pose, written as `xyz` and `rpy`).
+    /// Sets the pose of object `name` to `pose` (a world pose, written as the scene format's
+    /// `xyz` and `rpy` in degrees).
     pub fn set_object_pose(&mut self, name: &str, pose: Pose) -> Result<(), String> {
         let (yaw, pitch, roll) = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
         let t = pose.translation;
         let rpy = [roll, pitch, yaw].map(f32::to_degrees);
-        self.set_pose(name, [t.x, t.y, t.z], rpy)
+        let o = self.object_mut(name)?;
+        let mut table = toml::Table::new();
+        table.insert("xyz".into(), floats(&[t.x, t.y, t.z]));
+        table.insert("rpy".into(), floats(&rpy));
+        o.insert("pose".into(), toml::Value::Table(table));
+        Ok(())
     }
 
     /// The agent entry named `name`.
