@@ -364,17 +364,15 @@ pub fn run_one(
                 }
                 _ => None,
             };
-            let cause = (!solved).then(|| run.oracle.last_failure()).flatten().map(
-                |(task, args, message)| FailureCause {
-                    task: task.clone(),
-                    args: args.clone(),
-                    constraint: run
-                        .oracle
-                        .last_failure_stage()
-                        .map_or_else(|| "?".to_string(), |s| s.name().to_string()),
-                    message: message.clone(),
-                },
-            );
+            let cause = (!solved)
+                .then(|| run.oracle.last_failure())
+                .flatten()
+                .map(|f| FailureCause {
+                    task: f.task.clone(),
+                    args: f.args.clone(),
+                    constraint: f.stage.map_or_else(|| "?".into(), |s| s.name().to_string()),
+                    message: f.why.clone(),
+                });
             RunRecord {
                 plan_file_error,
                 cause,

@@ -127,6 +127,18 @@ struct Pulled {
     stage: Option<gtp::planner::Stage>,
 }
 
+/// A geometric task that found no (further) solution.
+#[derive(Clone, Debug)]
+pub struct TaskFailure {
+    /// The task as the domain names it, and its arguments.
+    pub task: String,
+    pub args: Vec<String>,
+    /// The GTP's reason in words.
+    pub why: String,
+    /// The stage of the GTP's search (the constraint) that stopped it, when it named one.
+    pub stage: Option<gtp::planner::Stage>,
+}
+
 /// The GTP as an HTN oracle. See the module docs.
 pub struct GtpOracle {
     planner: Arc<Planner>,
@@ -139,10 +151,8 @@ pub struct GtpOracle {
     streams: HashMap<u64, Stream>,
     next_stream: u64,
     stats: HashMap<String, TaskStats>,
-    /// The last request that found no solution: task, arguments, why.
-    last_failure: Option<(String, Vec<String>, String)>,
-    /// The stage (constraint) that stopped that request, when the GTP named one.
-    last_stage: Option<gtp::planner::Stage>,
+    /// The last request that found no solution.
+    last_failure: Option<TaskFailure>,
     /// The HTN search's deadline, passed to every GTP call.
     deadline: Option<std::time::Instant>,
 }
@@ -170,7 +180,6 @@ impl GtpOracle {
             next_stream: 0,
             stats: HashMap::new(),
             last_failure: None,
-            last_stage: None,
             deadline: None,
         };
         let frame = oracle.frame(world);
@@ -202,15 +211,10 @@ impl GtpOracle {
         &self.planner
     }
 
-    /// The last geometric task that found no (further) solution, with its arguments and the
+    /// The last geometric task that found no (further) solution: its arguments, why, and the
     /// constraint that stopped it.
-    pub fn last_failure(&self) -> Option<&(String, Vec<String>, String)> {
+    pub fn last_failure(&self) -> Option<&TaskFailure> {
         self.last_failure.as_ref()
-    }
-
-    /// The stage of the GTP's search (the constraint) that stopped [`GtpOracle::last_failure`].
-    pub fn last_failure_stage(&self) -> Option<gtp::planner::Stage> {
-        self.last_stage
     }
 
     /// The shared literals of the initial world.
@@ -381,8 +385,12 @@ impl GeometricOracle for GtpOracle {
         if result.is_none() {
             let why = failure.unwrap_or_else(|| "no further solution".into());
             s.last_failure = Some(why.clone());
-            self.last_failure = Some((task, args, why));
-            self.last_stage = stage;
+            self.last_failure = Some(TaskFailure {
+                task,
+                args,
+                why,
+                stage,
+            });
         }
         Ok(result)
     }

@@ -61,9 +61,11 @@ impl Run {
     /// that stopped it, when there is one.
     pub fn failure_message(&self) -> String {
         match self.oracle.last_failure() {
-            Some((task, args, why)) => format!(
-                "no decomposition works; the last geometric task to fail was {task}({}): {why}",
-                args.join(", ")
+            Some(f) => format!(
+                "no decomposition works; the last geometric task to fail was {}({}): {}",
+                f.task,
+                f.args.join(", "),
+                f.why
             ),
             None => "no decomposition works (no geometric task failed)".into(),
         }
