@@ -1,14 +1,15 @@
 //! Precondition pull-up: methods' preconditions gain what their subtasks certainly require,
 //! so that bindings fail early and bind through static facts.
 
-use super::{CFormula, CLit, CMethod, CNum, CTerm, Compiled, free_vars};
+use super::{CEffect, CFormula, CLit, CMethod, CNum, CTerm, Compiled, free_vars};
 
 /// Precondition pull-up. A method's precondition gains what its subtasks certainly require:
-/// - from its first subtask, everything quantifier-free that subtask requires in the state
-///   where it starts (that is the state the method's precondition is evaluated in): an
-///   action's precondition, or the precondition of an abstract task's only method;
-/// - from every other subtask, the static literals it requires (static facts hold or fail for
-///   the whole plan).
+/// from each subtask, every quantifier-free literal it requires in the state where it starts
+/// (an action's precondition, or the precondition of an abstract task's only method) over
+/// predicates that no subtask before it may change. The first subtask starts in the state
+/// the method's precondition is evaluated in; a later one starts in a state that agrees with
+/// it on every predicate its predecessors' decompositions leave alone (static facts, and in
+/// the learned domains, say, a card's place across the unlocking steps before the move).
 ///
 /// What an abstract task requires is what all its methods require over the task's arguments
 /// (the literals common to every method: the only method's whole precondition, or, say, the
@@ -29,6 +30,7 @@ pub(super) fn pull_up(c: &mut Compiled) {
             _ => false,
         }
     };
+    let changes = may_change(c);
     for _round in 0..6 {
         // What each task requires, over its argument positions: (literal, static).
         let mut req: Vec<Vec<(CFormula, bool)>> = vec![Vec::new(); c.tasks.len()];
@@ -61,20 +63,22 @@ pub(super) fn pull_up(c: &mut Compiled) {
         let mut changed = false;
         for mi in 0..c.methods.len() {
             let mut extra: Vec<CFormula> = Vec::new();
+            // What the subtasks before the current one may change.
+            let mut before = Changes::new(c.preds.len());
             for (i, (t, args)) in c.methods[mi].subtasks.iter().enumerate() {
-                if let Some(a) = c.tasks[*t as usize].action
-                    && c.actions[a as usize].evaluable.is_some()
-                    && i > 0
-                {
-                    continue;
-                }
-                for (f, st) in &req[*t as usize] {
-                    if (i == 0 || *st)
-                        && let Some(f) = rename(f, args)
-                    {
-                        extra.push(f);
+                let evaluable = c.tasks[*t as usize]
+                    .action
+                    .is_some_and(|a| c.actions[a as usize].evaluable.is_some());
+                if !(evaluable && i > 0) {
+                    for (f, st) in &req[*t as usize] {
+                        if (*st || !before.touches(f))
+                            && let Some(f) = rename(f, args)
+                        {
+                            extra.push(f);
+                        }
                     }
                 }
+                before.union(&changes[*t as usize]);
             }
             let m = &mut c.methods[mi];
             for f in extra {
@@ -181,4 +185,98 @@ pub(super) fn rename(f: &CFormula, args: &[CTerm]) -> Option<CFormula> {
         CFormula::Compare(op, a, b) => CFormula::Compare(*op, num(a, args)?, num(b, args)?),
         CFormula::Exists(..) | CFormula::Forall(..) => return None,
     })
+}
+
+/// The predicates (and whether any numeric fluent) a task's decompositions may change.
+#[derive(Clone, PartialEq)]
+struct Changes {
+    preds: Vec<bool>,
+    fluents: bool,
+}
+
+impl Changes {
+    fn new(n: usize) -> Changes {
+        Changes {
+            preds: vec![false; n],
+            fluents: false,
+        }
+    }
+
+    fn union(&mut self, o: &Changes) {
+        for (a, b) in self.preds.iter_mut().zip(&o.preds) {
+            *a |= *b;
+        }
+        self.fluents |= o.fluents;
+    }
+
+    /// Whether `f`'s truth may change: it reads a changed predicate or a fluent that may
+    /// change.
+    fn touches(&self, f: &CFormula) -> bool {
+        match f {
+            CFormula::True | CFormula::Eq(..) => false,
+            CFormula::Atom(p, _) => self.preds[*p as usize],
+            CFormula::Not(x) => self.touches(x),
+            CFormula::And(xs) | CFormula::Or(xs) => xs.iter().any(|x| self.touches(x)),
+            CFormula::Imply(a, b) => self.touches(a) || self.touches(b),
+            CFormula::Compare(..) => self.fluents,
+            CFormula::Exists(..) | CFormula::Forall(..) => true,
+        }
+    }
+
+    /// Marks what effects `effs` change.
+    fn mark(&mut self, effs: &[CEffect]) {
+        for e in effs {
+            match e {
+                CEffect::Add(p, _) | CEffect::Del(p, _) => self.preds[*p as usize] = true,
+                CEffect::Forall(_, inner) | CEffect::When(_, inner) => self.mark(inner),
+                CEffect::Num(..) => self.fluents = true,
+            }
+        }
+    }
+}
+
+/// Per task, what its decompositions may change: an action its effects (an evaluable one
+/// also every shared predicate, which geometry sets), an abstract task what its methods'
+/// subtasks may change (to a fixpoint).
+fn may_change(c: &Compiled) -> Vec<Changes> {
+    let n = c.preds.len();
+    let mut out: Vec<Changes> = c
+        .tasks
+        .iter()
+        .map(|t| {
+            let mut ch = Changes::new(n);
+            if let Some(a) = t.action {
+                let act = &c.actions[a as usize];
+                ch.mark(&act.effects);
+                if act.evaluable.is_some() {
+                    ch.union(&Changes {
+                        preds: c.shared_preds.clone(),
+                        fluents: false,
+                    });
+                }
+            }
+            ch
+        })
+        .collect();
+    loop {
+        let mut changed = false;
+        for t in 0..c.tasks.len() {
+            if c.tasks[t].action.is_some() {
+                continue;
+            }
+            let mut ch = out[t].clone();
+            for &m in &c.tasks[t].methods {
+                for (st, _) in &c.methods[m as usize].subtasks {
+                    ch.union(&out[*st as usize]);
+                }
+            }
+            if ch != out[t] {
+                out[t] = ch;
+                changed = true;
+            }
+        }
+        if !changed {
+            return out;
+        }
+    }
 }
