@@ -18,11 +18,13 @@
 //! unsolvable.
 //!
 //! Pruning that loses no plan (all of it sound):
-//! - *precondition pull-up* (`compile/pull_up.rs`): a method's precondition gains its first
-//!   subtask's precondition (evaluated in the same state) and the static literals of all its primitive
-//!   subtasks, climbing through abstract tasks (a task requires what every one of its methods
-//!   requires over its arguments), so bindings fail early and bind through static facts
-//!   (indexed by argument);
+//! - *precondition pull-up* (`compile/pull_up.rs`): a method's precondition gains what each
+//!   subtask requires over predicates no subtask before it may change (all of the first
+//!   subtask's precondition, which is evaluated in the same state; the static literals of every
+//!   subtask; a later move's own literals past bookkeeping steps that cannot touch them),
+//!   climbing through abstract tasks (a task requires what every one of its methods requires
+//!   over its arguments), so bindings fail early and bind through static facts (indexed by
+//!   argument);
 //! - *goal relevance* (`search/relevance.rs`): each suffix of the task network carries the
 //!   set of goal literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
