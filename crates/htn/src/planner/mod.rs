@@ -39,7 +39,9 @@
 //! Fallback (`search/driver.rs`): with a time limit, on a purely symbolic problem, the
 //! depth-first search gets the first `1 - best_first_share` of the time; if it has found no
 //! plan by then, a weighted best-first progression search (`search/bfs.rs`, as pandaPI's)
-//! takes the rest. It finds the
+//! takes the rest: a quarter of it with the state-free estimate, then, when the relaxed
+//! composition was ground, the rest with h_add over it (fast estimates solve Transport's
+//! road networks, h_add AssemblyHierarchical). It finds the
 //! plans of learned domains (Freecell) that amount to a blind state-space search, where the
 //! domain-order depth-first search gets lost in abstract descent.
 

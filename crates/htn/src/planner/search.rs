@@ -92,7 +92,8 @@ struct TreeRec {
 /// Why an engine stopped.
 enum Stop {
     Found,
-    /// The depth-first search used its share of the time: the best-first search takes over.
+    /// The engine (or phase) used its share of the time: the next one takes over (the
+    /// best-first search after the depth-first one, h_add after the state-free estimate).
     Switch,
     Exhausted,
     Limit(Limit),
