@@ -343,11 +343,12 @@ impl<'a, 'o> Search<'a, 'o> {
         if let Some(rc) = &rc {
             self.stats.rc_actions = rc.n_actions as u64;
             self.stats.rc_methods = rc.n_methods as u64;
-            let until = self.opts.limits.time.map(|t| {
-                let left = t.saturating_sub(self.start.elapsed());
-                std::time::Instant::now() + left.mul_f64(CHEAP_SHARE)
-            });
-            match self.best_first_with(&init, None, until) {
+        }
+        // The fallback runs only under a time limit; without one there is no first phase.
+        if let (Some(_), Some(t)) = (&rc, self.opts.limits.time) {
+            let left = t.saturating_sub(self.start.elapsed());
+            let until = std::time::Instant::now() + left.mul_f64(CHEAP_SHARE);
+            match self.best_first_with(&init, None, Some(until)) {
                 Stop::Switch => {}
                 stop => return stop,
             }
