@@ -1,7 +1,8 @@
 //! Precondition pull-up: methods' preconditions gain what their subtasks certainly require,
 //! so that bindings fail early and bind through static facts.
 
-use super::{CEffect, CFormula, CLit, CMethod, CNum, CTerm, Compiled, free_vars};
+use super::statics::Changes;
+use super::{CFormula, CLit, CMethod, CNum, CTerm, Compiled, free_vars};
 
 /// Precondition pull-up. A method's precondition gains what its subtasks certainly require:
 /// from each subtask, every quantifier-free literal it requires in the state where it starts
@@ -185,54 +186,6 @@ pub(super) fn rename(f: &CFormula, args: &[CTerm]) -> Option<CFormula> {
         CFormula::Compare(op, a, b) => CFormula::Compare(*op, num(a, args)?, num(b, args)?),
         CFormula::Exists(..) | CFormula::Forall(..) => return None,
     })
-}
-
-/// The predicates (and whether any numeric fluent) a task's decompositions may change.
-#[derive(Clone, PartialEq)]
-struct Changes {
-    preds: Vec<bool>,
-    fluents: bool,
-}
-
-impl Changes {
-    fn new(n: usize) -> Changes {
-        Changes {
-            preds: vec![false; n],
-            fluents: false,
-        }
-    }
-
-    fn union(&mut self, o: &Changes) {
-        for (a, b) in self.preds.iter_mut().zip(&o.preds) {
-            *a |= *b;
-        }
-        self.fluents |= o.fluents;
-    }
-
-    /// Whether `f`'s truth may change: it reads a changed predicate or a fluent that may
-    /// change.
-    fn touches(&self, f: &CFormula) -> bool {
-        match f {
-            CFormula::True | CFormula::Eq(..) => false,
-            CFormula::Atom(p, _) => self.preds[*p as usize],
-            CFormula::Not(x) => self.touches(x),
-            CFormula::And(xs) | CFormula::Or(xs) => xs.iter().any(|x| self.touches(x)),
-            CFormula::Imply(a, b) => self.touches(a) || self.touches(b),
-            CFormula::Compare(..) => self.fluents,
-            CFormula::Exists(..) | CFormula::Forall(..) => true,
-        }
-    }
-
-    /// Marks what effects `effs` change.
-    fn mark(&mut self, effs: &[CEffect]) {
-        for e in effs {
-            match e {
-                CEffect::Add(p, _) | CEffect::Del(p, _) => self.preds[*p as usize] = true,
-                CEffect::Forall(_, inner) | CEffect::When(_, inner) => self.mark(inner),
-                CEffect::Num(..) => self.fluents = true,
-            }
-        }
-    }
 }
 
 /// Per task, what its decompositions may change: an action its effects (an evaluable one
