@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use htn::model::{Domain, Problem};
-use htn::planner::{Limit, Limits, Outcome, PlannerOptions, SearchResult, plan};
+use htn::plan::Plan;
+use htn::planner::{Limit, Limits, Outcome, PlannerOptions, SearchResult, SearchStats, plan};
 use htn::validate::validate;
 
 fn load(dir: &Path, domain: &str, problem: &str) -> (Domain, Problem) {
@@ -70,48 +71,47 @@ fn shared(domain: &str) -> Option<PathBuf> {
     }
 }
 
-#[test]
-#[ignore = "needs ../shared/benchmarks beside the checkout; .ci/run runs it when present"]
-fn a_freecell_problem_is_solved_by_the_fallback() {
-    let dir = shared("Freecell-Learned-ECAI-16").expect("../shared/benchmarks beside the checkout");
-    let (d, p) = load(&dir, "domain.hddl", "probfreecell-02-2.hddl");
+/// A shared benchmark problem solved by the best-first search from the start (the
+/// depth-first search gets lost in these) within `secs`, its plan validated; the plan and the
+/// search's statistics.
+fn solve_best_first(domain: &str, problem: &str, secs: u64) -> (Plan, SearchStats) {
+    let dir = shared(domain).expect("../shared/benchmarks beside the checkout");
+    let (d, p) = load(&dir, "domain.hddl", problem);
     let opts = PlannerOptions {
         limits: Limits {
-            time: Some(Duration::from_secs(60)),
+            time: Some(Duration::from_secs(secs)),
             ..Limits::default()
         },
-        // The depth-first search gets lost here: start with the best-first search.
         best_first_share: 1.0,
         ..PlannerOptions::default()
     };
     let r = plan(&d, &p, &opts, None).unwrap();
-    let Outcome::Found { plan } = &r.outcome else {
-        panic!("no plan: {:?} after {:?}", r.outcome, r.stats)
+    let plan = match r.outcome {
+        Outcome::Found { plan } => plan,
+        other => panic!("no plan: {other:?} after {:?}", r.stats),
     };
-    assert!(r.stats.best_first);
-    validate(&d, &p, plan, &[]).unwrap();
+    validate(&d, &p, &plan, &[]).unwrap();
+    (plan, r.stats)
+}
+
+#[test]
+#[ignore = "needs ../shared/benchmarks beside the checkout; .ci/run runs it when present"]
+fn a_freecell_problem_is_solved_by_the_fallback() {
+    let (_, stats) = solve_best_first("Freecell-Learned-ECAI-16", "probfreecell-02-2.hddl", 60);
+    assert!(stats.best_first);
 }
 
 #[test]
 #[ignore = "needs ../shared/benchmarks beside the checkout; .ci/run runs it when present"]
 fn an_assembly_problem_is_solved_from_the_initial_state_after_the_first_phase() {
-    let dir = shared("AssemblyHierarchical").expect("../shared/benchmarks beside the checkout");
-    let (d, p) = load(&dir, "domain.hddl", "genericLinearProblem_depth08.hddl");
-    let opts = PlannerOptions {
-        limits: Limits {
-            time: Some(Duration::from_secs(20)),
-            ..Limits::default()
-        },
-        best_first_share: 1.0,
-        ..PlannerOptions::default()
-    };
-    let r = plan(&d, &p, &opts, None).unwrap();
-    let Outcome::Found { plan } = &r.outcome else {
-        panic!("no plan: {:?} after {:?}", r.outcome, r.stats)
-    };
+    let (plan, stats) = solve_best_first(
+        "AssemblyHierarchical",
+        "genericLinearProblem_depth08.hddl",
+        20,
+    );
     // The state-free estimate does not find this plan in its share (about 5 s): the plan
-    // comes from the second phase, which must start from the initial state again.
-    assert!(r.stats.rc_methods > 0, "{:?}", r.stats);
-    validate(&d, &p, plan, &[]).unwrap();
+    // comes from the second phase, which must start from the initial state again (the
+    // validation in `solve_best_first` fails otherwise).
+    assert!(stats.rc_methods > 0, "{stats:?}");
     assert_eq!(plan.actions.len(), 18, "2 x depth + 2 actions");
 }
