@@ -33,6 +33,7 @@
 
 pub mod grasp;
 pub mod gripper;
+mod nearest_kd_tree;
 pub mod placement;
 pub mod planner;
 pub mod robot;

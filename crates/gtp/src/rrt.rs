@@ -10,6 +10,8 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
+use crate::nearest_kd_tree::KdTree;
+
 /// The joint space of an arm: one entry per joint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointSpace {
@@ -126,6 +128,24 @@ pub(crate) fn wrap(a: f32) -> f32 {
         return s - TAU - PI;
     }
     s.rem_euclid(TAU) - PI
+}
+
+/// As [`JointSpace::distance_squared`] from `q` to a tree node `c`, with fewer branches: on a
+/// continuous joint, ends within [-pi, pi) (all but a root given out of range) differ by less
+/// than a turn, and one turn, added or taken, folds the difference.
+fn distance_squared_to_node(space: &JointSpace, q: &[f32], c: &[f32]) -> f32 {
+    let mut d2 = 0.0;
+    for k in 0..c.len() {
+        let mut d = q[k] - c[k];
+        if space.continuous[k] {
+            d -= TAU * ((d >= PI) as i32 - (d < -PI) as i32) as f32;
+            if !(-PI..PI).contains(&d) {
+                d = wrap(d);
+            }
+        }
+        d2 += d * d;
+    }
+    d2
 }
 
 /// Limits and settings of one RRT-Connect query.
@@ -328,19 +348,24 @@ fn check_steps(
     true
 }
 
-/// Node storage of one tree: flat configurations and parent indices.
+/// Node storage of one tree: flat configurations and parent indices, and the k-d tree that
+/// finds a node's nearest.
 struct Tree {
     dim: usize,
     configs: Vec<f32>,
     parents: Vec<usize>,
+    index: KdTree,
 }
 
 impl Tree {
-    fn new(root: &[f32]) -> Tree {
+    fn new(space: &JointSpace, root: &[f32]) -> Tree {
+        let mut index = KdTree::new(&space.continuous);
+        index.insert(root);
         Tree {
             dim: root.len(),
             configs: root.to_vec(),
             parents: vec![usize::MAX],
+            index,
         }
     }
     fn len(&self) -> usize {
@@ -352,30 +377,14 @@ impl Tree {
     fn push(&mut self, q: &[f32], parent: usize) -> usize {
         self.configs.extend_from_slice(q);
         self.parents.push(parent);
+        self.index.insert(q);
         self.len() - 1
     }
+    /// The first node of least distance to `q`.
     fn nearest(&self, space: &JointSpace, q: &[f32]) -> usize {
-        let mut best = (f32::INFINITY, 0);
-        for (i, c) in self.configs.chunks_exact(self.dim).enumerate() {
-            // As `JointSpace::distance_squared`, with fewer branches: on a continuous joint,
-            // ends within [-pi, pi) (all but a root given out of range) differ by less than a
-            // turn, and one turn, added or taken, folds the difference.
-            let mut d2 = 0.0;
-            for k in 0..self.dim {
-                let mut d = q[k] - c[k];
-                if space.continuous[k] {
-                    d -= TAU * ((d >= PI) as i32 - (d < -PI) as i32) as f32;
-                    if !(-PI..PI).contains(&d) {
-                        d = wrap(d);
-                    }
-                }
-                d2 += d * d;
-            }
-            if d2 < best.0 {
-                best = (d2, i);
-            }
-        }
-        best.1
+        self.index
+            .nearest(q, |i| distance_squared_to_node(space, q, self.get(i)))
+            .unwrap_or(0)
     }
     /// Root-to-node configurations.
     fn branch(&self, mut i: usize) -> Vec<Vec<f32>> {
@@ -542,8 +551,8 @@ fn plan_once(
         ));
     }
     let began = Instant::now();
-    let mut a = Tree::new(start);
-    let mut b = Tree::new(goal);
+    let mut a = Tree::new(space, start);
+    let mut b = Tree::new(space, goal);
     let mut a_is_start = true;
     let mut sample = vec![0.0; space.dim()];
     loop {
