@@ -111,3 +111,28 @@ fn report_convex_pieces() {
         );
     }
 }
+
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn the_real_srdfs_are_read() {
+    let pr2 = load("pr2_description/urdf/robot.xml", &[])
+        .with_srdf_file(robots().join("pr2_description/srdf/robot.xml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    // The end effectors name no parent group: the groups whose chains end at their parent link.
+    assert_eq!(pr2.arm_names(), vec!["right_arm", "left_arm"]);
+    let s = pr2.semantics();
+    assert_eq!(s.virtual_joints[0].1, "planar");
+    assert_eq!(
+        s.group("arms").unwrap().subgroups,
+        vec!["left_arm", "right_arm"]
+    );
+    let panda = load("panda_description/urdf/panda.urdf", &[])
+        .with_srdf_file(robots().join("panda_moveit_config/config/panda.srdf"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(panda.arm_names(), vec!["panda_arm"]);
+    assert_eq!(
+        panda.semantics().passive_joints,
+        vec!["panda_finger_joint2"]
+    );
+    assert!(panda.semantics().disabled_collisions.len() >= 30);
+}
