@@ -136,3 +136,42 @@ fn the_real_srdfs_are_read() {
     );
     assert!(panda.semantics().disabled_collisions.len() >= 30);
 }
+
+/// Each collision mesh file's fill of its hull and what the rule made of it (`--nocapture`).
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn report_fill_ratios() {
+    use geometry::agent::convex::convex_mesh;
+    for urdf in [
+        "pr2_description/urdf/robot.xml",
+        "panda_description/urdf/panda.urdf",
+    ] {
+        let path = robots().join(urdf);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let packages = PackagePath {
+            urdf_dir: path.parent().unwrap().to_path_buf(),
+            scene_dirs: vec![robots()],
+        };
+        let mut seen = std::collections::BTreeSet::new();
+        for block in text.split("<collision").skip(1) {
+            let block = block.split("</collision>").next().unwrap();
+            let Some(start) = block.find("filename=\"") else {
+                continue;
+            };
+            let uri = &block[start + 10..];
+            let uri = &uri[..uri.find('"').unwrap()];
+            if !seen.insert(uri.to_string()) {
+                continue;
+            }
+            let file = packages.resolve(uri).unwrap();
+            let m = convex_mesh(&file, [1.0; 3], ConvexMode::Auto).unwrap();
+            let name = file.file_name().unwrap().to_string_lossy();
+            let fill = m.fill.map_or("open".to_string(), |f| format!("{f:.2}"));
+            println!(
+                "{name}: {} triangles, fill {fill}, {} pieces",
+                m.triangles,
+                m.pieces.len()
+            );
+        }
+    }
+}

@@ -2,7 +2,8 @@
 //! the hull would fill a hollow that matters.
 //!
 //! The rule ([`ConvexMode::Auto`]): a mesh is decomposed (parry3d's VHACD, exact hulls of its
-//! parts) when it is closed (every edge shared by two triangles, after welding equal vertices)
+//! parts) when it is closed and consistently wound (every edge shared by two triangles that
+//! run it in opposite directions, after welding equal vertices)
 //! and its volume is below [`DECOMPOSE_BELOW`] of its hull's: the hull would then fill more
 //! than half of the space the mesh leaves free, as between a gripper's jaws or inside a
 //! U-shaped link. Any other mesh (open, or filling its hull well) collides as its hull, the
@@ -149,8 +150,9 @@ fn centred(shape: &SharedShape) -> Option<ConvexPiece> {
     })
 }
 
-/// The enclosed volume of a closed triangle mesh (every edge shared by exactly two triangles
-/// once equal vertices are welded), `None` when it is open.
+/// The enclosed volume of a closed, consistently wound triangle mesh (every edge shared by
+/// exactly two triangles that run it in opposite directions, once equal vertices are welded),
+/// `None` otherwise (open, or wound inconsistently: its signed volume would mean nothing).
 fn closed_volume(vertices: &[Vector], triangles: &[[u32; 3]]) -> Option<f32> {
     let mut id: HashMap<[u32; 3], u32> = HashMap::new();
     let weld: Vec<u32> = vertices
@@ -167,7 +169,10 @@ fn closed_volume(vertices: &[Vector], triangles: &[[u32; 3]]) -> Option<f32> {
         let w = t.map(|i| weld[i as usize]);
         for k in 0..3 {
             let (a, b) = (w[k], w[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            // +1 for a -> b, +1000 for b -> a: a closed, consistently wound surface has every
+            // edge once each way (1001).
+            let count = edges.entry((a.min(b), a.max(b))).or_default();
+            *count += if a < b { 1 } else { 1000 };
         }
         let [a, b, c] = t.map(|i| {
             let v = vertices[i as usize];
@@ -182,7 +187,7 @@ fn closed_volume(vertices: &[Vector], triangles: &[[u32; 3]]) -> Option<f32> {
     }
     edges
         .values()
-        .all(|&n| n == 2)
+        .all(|&n| n == 1001)
         .then_some(volume.abs() as f32)
 }
 
