@@ -257,3 +257,28 @@ fn a_mesh_over_the_triangle_cap_is_refused() {
         ],
     );
 }
+
+#[test]
+fn a_collada_file_with_a_bad_index_is_refused_without_a_panic() {
+    let dir = scratch("dae-index");
+    let dae = r##"<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit meter="1"/></asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 9</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n">
+    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"##;
+    std::fs::write(dir.join("bad.dae"), dae).unwrap();
+    let scene = scene_with(&dir, &collision("bad.dae"), "");
+    let o = facts(&scene, &[]);
+    assert_bad_input(&o, &["link 'body'", "bad.dae"]);
+}

@@ -2,7 +2,8 @@
 //! the `mesh-loader` crate, for scene objects and for the collision meshes of URDF links.
 //!
 //! Vertices and triangles only (normals, texture coordinates and materials are dropped). A
-//! COLLADA file's `<unit meter="..">` and its nodes' transforms are applied by `mesh-loader`;
+//! COLLADA file's nodes' transforms are applied by `mesh-loader`, its `<unit meter="..">` here
+//! (to every length, translations included);
 //! its `<up_axis>` is not, as in ROS (rviz and MoveIt's `geometric_shapes` reset the root
 //! transform that would turn a Y-up file): ROS meshes are drawn in their link's frame, z up.
 //! Errors are one sentence without the file name (the caller adds it). Files over
@@ -56,7 +57,15 @@ pub fn parse_mesh(bytes: &[u8], path: &Path) -> Result<MeshData, String> {
     let loader = mesh_loader::Loader::default()
         .merge_meshes(true)
         .custom_reader(|_| Ok(Vec::new()));
-    let parsed = std::panic::catch_unwind(|| loader.load_from_slice(bytes, &named));
+    // mesh-loader scales a COLLADA file's vertices by its unit before its node transforms,
+    // leaving their translations unscaled; COLLADA's unit applies to every length of the
+    // document, so the unit is read out here and applied to the result.
+    let (bytes, unit) = if ext == "dae" {
+        collada_without_unit(bytes)?
+    } else {
+        (std::borrow::Cow::Borrowed(bytes), 1.0)
+    };
+    let parsed = quietly(|| loader.load_from_slice(&bytes, &named));
     let scene = match parsed {
         Ok(Ok(scene)) => scene,
         Ok(Err(e)) => {
@@ -78,8 +87,69 @@ pub fn parse_mesh(bytes: &[u8], path: &Path) -> Result<MeshData, String> {
                 .map(|f| [f[0] + first, f[1] + first, f[2] + first]),
         );
     }
+    if unit != 1.0 {
+        for v in &mut mesh.vertices {
+            *v *= unit;
+        }
+    }
     check_mesh(&mesh, &ext)?;
     Ok(mesh)
+}
+
+/// A COLLADA document with its `<unit meter="..">` set to 1, and that unit.
+fn collada_without_unit(bytes: &[u8]) -> Result<(std::borrow::Cow<'_, [u8]>, f32), String> {
+    let text = String::from_utf8_lossy(bytes);
+    let Some(at) = text.find("<unit") else {
+        return Ok((std::borrow::Cow::Borrowed(bytes), 1.0));
+    };
+    let end = at + text[at..].find('>').unwrap_or(text.len() - at);
+    let head = &text[at..end];
+    let Some(m) = head.find("meter=") else {
+        return Ok((std::borrow::Cow::Borrowed(bytes), 1.0));
+    };
+    let quote_at = at + m + "meter=".len();
+    let quote = text[quote_at..]
+        .chars()
+        .next()
+        .filter(|c| *c == '"' || *c == '\'');
+    let Some(quote) = quote else {
+        return Err("COLLADA <unit meter=..> is not quoted".into());
+    };
+    let value_at = quote_at + 1;
+    let value_end = value_at
+        + text[value_at..]
+            .find(quote)
+            .ok_or("COLLADA <unit meter=..> is not closed")?;
+    let value = &text[value_at..value_end];
+    let unit: f32 = value
+        .trim()
+        .parse()
+        .ok()
+        .filter(|u: &f32| u.is_finite() && *u > 0.0)
+        .ok_or_else(|| format!("COLLADA <unit meter=\"{value}\"> is not a positive number"))?;
+    let edited = format!("{}1{}", &text[..value_at], &text[value_end..]);
+    Ok((std::borrow::Cow::Owned(edited.into_bytes()), unit))
+}
+
+/// `f()`, or `Err(())` when it panics; the panic prints nothing (mesh-loader can panic on a
+/// malformed COLLADA file, which is an error of the input, reported as such by the caller).
+fn quietly<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> Result<T, ()> {
+    thread_local! {
+        static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(f);
+    QUIET.with(|q| q.set(false));
+    result.map_err(|_| ())
 }
 
 /// mesh-loader's message without the placeholder file name it was given.

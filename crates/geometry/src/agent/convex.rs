@@ -76,7 +76,11 @@ pub fn convex_mesh(
         return Ok(found.clone());
     }
     let mesh = mesh_file::read_mesh(path)?;
-    let made = Arc::new(make_convex(&mesh, scale, mode)?);
+    // parry's hull and VHACD may panic on degenerate input; a bad mesh must not take the
+    // caller down.
+    let made = std::panic::catch_unwind(|| make_convex(&mesh, scale, mode))
+        .map_err(|_| "the convex hull computation failed on this mesh (degenerate?)".to_string())?;
+    let made = Arc::new(made?);
     cache
         .lock()
         .unwrap_or_else(|e| e.into_inner())
