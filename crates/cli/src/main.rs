@@ -39,6 +39,10 @@ pub mod exit {
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// A folder searched for the ROS packages that `package://` names in URDFs refer to
+    /// (repeatable; searched before the scene's `package_path` and ROS_PACKAGE_PATH).
+    #[arg(long = "package-path", value_name = "DIR", global = true)]
+    package_path: Vec<std::path::PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -80,6 +84,7 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
+    geometry::agent::packages::set_command_line_dirs(cli.package_path);
     let result = match cli.command {
         Command::Demo(args) => cmd::demo::run(args),
         Command::Bench(args) => cmd::bench::run(args),

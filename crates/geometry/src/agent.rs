@@ -21,8 +21,11 @@
 //!   URDF) and `<capsule radius=".." length=".."/>`: a capsule whose axis is the element's z and
 //!   whose `length` is the distance between the centres of its two hemispherical caps (the
 //!   SDFormat convention; `urdf-rs` reads this element although ROS's URDF 1.0 has no capsule).
-//!   Meshes are rejected: the agent models are made of primitives so that collision checks are
-//!   cheap. Visual elements are ignored.
+//!   `<mesh filename=".." scale="..">` (STL, COLLADA, OBJ; `package://`, `file://` or relative
+//!   names, [`packages`]) collides as convex pieces, its hull or a decomposition ([`convex`]);
+//!   a link may have several collision elements. Visual elements are only checked for their
+//!   mesh files (a missing one is a warning); transmissions, Gazebo, ros2_control and
+//!   materials are ignored.
 //! * Revolute and prismatic joints must have `<limit lower=".." upper="..">` with
 //!   `lower < upper`; continuous joints have no limits.
 //! * Every number must be finite.
@@ -35,11 +38,25 @@ use std::sync::Arc;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
+pub mod convex;
 mod loader;
+pub mod packages;
 pub mod srdf;
 mod xml;
 
+pub use convex::ConvexMode;
+pub use packages::PackagePath;
 pub use srdf::Semantics;
+
+/// How the mesh elements of a URDF are read: where its file names lead, and how each link's
+/// collision meshes become convex (by [`convex`]'s rule unless a link is named here).
+#[derive(Clone, Debug, Default)]
+pub struct MeshOptions {
+    /// The URDF's folder and the package path.
+    pub packages: PackagePath,
+    /// Links whose collision meshes are made by a mode other than [`ConvexMode::Auto`].
+    pub modes: HashMap<String, ConvexMode>,
+}
 
 /// Errors from loading an agent model or from using it with bad names or values.
 #[derive(Debug, thiserror::Error)]
@@ -274,6 +291,13 @@ pub enum Primitive {
         /// Distance between the centres of the two caps.
         length: f32,
     },
+    /// One convex piece of a collision mesh (its hull, or a part of its decomposition).
+    Convex {
+        /// Vertices of this piece.
+        vertices: usize,
+        /// Pieces the mesh was made into.
+        pieces: usize,
+    },
 }
 
 /// One collision shape of a link: a parry shape placed in the link frame.
@@ -499,6 +523,8 @@ pub struct AgentModel {
     /// For each configuration index, URDF 1.2's `<limit acceleration="..">` (rad/s^2 or
     /// m/s^2), `None` when absent, not positive or not finite.
     dof_acceleration_limits: Vec<Option<f32>>,
+    /// What loading found wrong but could read past (a visual mesh that names no file).
+    warnings: Vec<String>,
 }
 
 impl AgentModel {
@@ -566,8 +592,34 @@ impl AgentModel {
     }
 
     /// Loads URDF text; `source_name` (a file name, usually) is used in error messages.
+    /// Mesh file names are resolved against `source_name`'s folder and the package path of
+    /// the command line and `ROS_PACKAGE_PATH` ([`packages`]).
     pub fn from_urdf_str(text: &str, source_name: &str) -> Result<AgentModel, ModelError> {
-        crate::agent::loader::load(text, source_name)
+        let options = MeshOptions {
+            packages: PackagePath {
+                urdf_dir: Path::new(source_name)
+                    .parent()
+                    .map(Path::to_path_buf)
+                    .unwrap_or_default(),
+                scene_dirs: Vec::new(),
+            },
+            modes: HashMap::new(),
+        };
+        Self::from_urdf_str_with(text, source_name, &options)
+    }
+
+    /// Loads URDF text with its meshes read as `meshes` says.
+    pub fn from_urdf_str_with(
+        text: &str,
+        source_name: &str,
+        meshes: &MeshOptions,
+    ) -> Result<AgentModel, ModelError> {
+        crate::agent::loader::load(text, source_name, meshes)
+    }
+
+    /// What loading read past with a warning (a visual mesh that names no file).
+    pub fn load_warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The robot name from the URDF.

@@ -1,12 +1,22 @@
-//! Triangle-mesh files for scene objects: Wavefront OBJ and STL (ASCII and binary).
+//! Triangle-mesh files: Wavefront OBJ, STL (ASCII and binary) and COLLADA (`.dae`), read with
+//! the `mesh-loader` crate, for scene objects and for the collision meshes of URDF links.
 //!
-//! A small reader of our own: vertices and triangles only (normals, texture coordinates,
-//! materials and groups are ignored); polygons with more than three corners are fanned into
-//! triangles. Errors name the line (OBJ, ASCII STL) or byte offset (binary STL).
+//! Vertices and triangles only (normals, texture coordinates and materials are dropped). A
+//! COLLADA file's nodes' transforms are applied by `mesh-loader`, its `<unit meter="..">` here
+//! (to every length, translations included);
+//! its `<up_axis>` is not, as in ROS (rviz and MoveIt's `geometric_shapes` reset the root
+//! transform that would turn a Y-up file): ROS meshes are drawn in their link's frame, z up.
+//! Errors are one sentence without the file name (the caller adds it). Files over
+//! [`MAX_TRIANGLES`] triangles or [`MAX_VERTICES`] vertices are refused.
 
 use std::path::Path;
 
 use parry3d::math::Vector;
+
+/// The most triangles a mesh file may have.
+pub const MAX_TRIANGLES: usize = 250_000;
+/// The most vertices a mesh file may have (an STL file has three per triangle).
+pub const MAX_VERTICES: usize = 3 * MAX_TRIANGLES;
 
 /// A triangle soup read from a file: vertices in file units, triangles as vertex indices.
 #[derive(Clone, Debug, Default)]
@@ -15,188 +25,197 @@ pub struct MeshData {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Reads an OBJ or STL file, chosen by the extension (`.obj`, `.stl`; case-insensitive).
-/// The error is a sentence without the file name (the caller adds it).
+/// Reads an OBJ, STL or COLLADA file, chosen by the extension (`.obj`, `.stl`, `.dae`;
+/// case-insensitive). The error is a sentence without the file name (the caller adds it).
 pub fn read_mesh(path: &Path) -> Result<MeshData, String> {
-    let ext = path
-        .extension()
+    let ext = extension(path);
+    if !matches!(ext.as_str(), "obj" | "stl" | "dae") {
+        return Err(format!(
+            "unknown mesh format `.{ext}` (expected .obj, .stl or .dae)"
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh file: {e}"))?;
+    parse_mesh(&bytes, path)
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh file: {e}"))?;
-    let mesh = match ext.as_str() {
-        "obj" => parse_obj(&String::from_utf8_lossy(&bytes))?,
-        "stl" => parse_stl(&bytes)?,
-        _ => {
+        .unwrap_or_default()
+}
+
+/// Parses the bytes of a mesh file; `path` gives the format by its extension.
+pub fn parse_mesh(bytes: &[u8], path: &Path) -> Result<MeshData, String> {
+    let ext = extension(path);
+    if ext == "stl" {
+        check_stl_size(bytes)?;
+    }
+    // mesh-loader picks the format by the extension given; lower-case it so `.STL` reads too.
+    let named = Path::new("mesh").with_extension(&ext);
+    // A material library an OBJ names is not needed for geometry: read as empty.
+    let loader = mesh_loader::Loader::default()
+        .merge_meshes(true)
+        .custom_reader(|_| Ok(Vec::new()));
+    // mesh-loader scales a COLLADA file's vertices by its unit before its node transforms,
+    // leaving their translations unscaled; COLLADA's unit applies to every length of the
+    // document, so the unit is read out here and applied to the result.
+    let (bytes, unit) = if ext == "dae" {
+        collada_without_unit(bytes)?
+    } else {
+        (std::borrow::Cow::Borrowed(bytes), 1.0)
+    };
+    let parsed = quietly(|| loader.load_from_slice(&bytes, &named));
+    let scene = match parsed {
+        Ok(Ok(scene)) => scene,
+        Ok(Err(e)) => {
             return Err(format!(
-                "unknown mesh format `.{ext}` (expected .obj or .stl)"
+                "not a valid .{ext} file: {}",
+                clean(&e.to_string())
             ));
         }
+        Err(_) => return Err(format!("the .{ext} reader failed on this file")),
     };
-    check_mesh(&mesh)?;
+    let mut mesh = MeshData::default();
+    for m in scene.meshes {
+        let first = mesh.vertices.len() as u32;
+        mesh.vertices
+            .extend(m.vertices.iter().map(|v| Vector::new(v[0], v[1], v[2])));
+        mesh.triangles.extend(
+            m.faces
+                .iter()
+                .map(|f| [f[0] + first, f[1] + first, f[2] + first]),
+        );
+    }
+    if unit != 1.0 {
+        for v in &mut mesh.vertices {
+            *v *= unit;
+        }
+    }
+    check_mesh(&mesh, &ext)?;
     Ok(mesh)
 }
 
-fn check_mesh(mesh: &MeshData) -> Result<(), String> {
+/// A COLLADA document with its `<unit meter="..">` set to 1, and that unit.
+fn collada_without_unit(bytes: &[u8]) -> Result<(std::borrow::Cow<'_, [u8]>, f32), String> {
+    let text = String::from_utf8_lossy(bytes);
+    let Some(at) = text.find("<unit") else {
+        return Ok((std::borrow::Cow::Borrowed(bytes), 1.0));
+    };
+    let end = at + text[at..].find('>').unwrap_or(text.len() - at);
+    let head = &text[at..end];
+    let Some(m) = head.find("meter=") else {
+        return Ok((std::borrow::Cow::Borrowed(bytes), 1.0));
+    };
+    let quote_at = at + m + "meter=".len();
+    let quote = text[quote_at..]
+        .chars()
+        .next()
+        .filter(|c| *c == '"' || *c == '\'');
+    let Some(quote) = quote else {
+        return Err("COLLADA <unit meter=..> is not quoted".into());
+    };
+    let value_at = quote_at + 1;
+    let value_end = value_at
+        + text[value_at..]
+            .find(quote)
+            .ok_or("COLLADA <unit meter=..> is not closed")?;
+    let value = &text[value_at..value_end];
+    let unit: f32 = value
+        .trim()
+        .parse()
+        .ok()
+        .filter(|u: &f32| u.is_finite() && *u > 0.0)
+        .ok_or_else(|| format!("COLLADA <unit meter=\"{value}\"> is not a positive number"))?;
+    let edited = format!("{}1{}", &text[..value_at], &text[value_end..]);
+    Ok((std::borrow::Cow::Owned(edited.into_bytes()), unit))
+}
+
+/// `f()`, or `Err(())` when it panics; the panic prints nothing (mesh-loader can panic on a
+/// malformed COLLADA file, which is an error of the input, reported as such by the caller).
+fn quietly<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> Result<T, ()> {
+    thread_local! {
+        static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                previous(info);
+            }
+        }));
+    });
+    QUIET.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(f);
+    QUIET.with(|q| q.set(false));
+    result.map_err(|_| ())
+}
+
+/// mesh-loader's message without the placeholder file name it was given.
+fn clean(message: &str) -> String {
+    message
+        .replace(" (mesh.stl)", "")
+        .replace(" (mesh.obj)", "")
+        .replace(" (mesh.dae)", "")
+}
+
+/// A binary STL's declared triangle count against its size (an ASCII file starts with `solid`
+/// and does not match the binary layout).
+fn check_stl_size(bytes: &[u8]) -> Result<(), String> {
+    let declared = (bytes.len() >= 84)
+        .then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize);
+    let binary_size = declared.and_then(|n| n.checked_mul(50)?.checked_add(84));
+    if binary_size == Some(bytes.len()) {
+        return Ok(());
+    }
+    if bytes.trim_ascii_start().starts_with(b"solid") {
+        return Ok(());
+    }
+    match declared {
+        None => Err(format!(
+            "binary STL is {} bytes, shorter than its 84-byte header",
+            bytes.len()
+        )),
+        Some(n) => Err(format!(
+            "binary STL declares {n} triangles ({} bytes) but has {} bytes (truncated?)",
+            binary_size.map_or("too many".to_string(), |b| b.to_string()),
+            bytes.len()
+        )),
+    }
+}
+
+fn check_mesh(mesh: &MeshData, ext: &str) -> Result<(), String> {
     if mesh.triangles.is_empty() {
-        return Err("mesh has no triangles".into());
+        let what = if ext == "dae" {
+            "mesh has no triangles (a COLLADA file needs <triangles> or <polylist> in a \
+             <geometry> that its <visual_scene> instantiates)"
+        } else {
+            "mesh has no triangles"
+        };
+        return Err(what.into());
+    }
+    if mesh.triangles.len() > MAX_TRIANGLES {
+        return Err(format!(
+            "mesh has {} triangles, more than the {MAX_TRIANGLES} allowed (simplify it, \
+             e.g. with a decimation filter)",
+            mesh.triangles.len()
+        ));
+    }
+    if mesh.vertices.len() > MAX_VERTICES {
+        return Err(format!(
+            "mesh has {} vertices, more than the {MAX_VERTICES} allowed",
+            mesh.vertices.len()
+        ));
     }
     if let Some(v) = mesh.vertices.iter().find(|v| !v.is_finite()) {
         return Err(format!("mesh has a non-finite vertex {v:?}"));
     }
+    let n = mesh.vertices.len() as u32;
+    if mesh.triangles.iter().flatten().any(|&i| i >= n) {
+        return Err("a triangle names a vertex the mesh does not have".into());
+    }
     Ok(())
-}
-
-/// Parses Wavefront OBJ text: `v x y z [w]` and `f a b c ...` with `a`, `a/t`, `a//n`, `a/t/n`
-/// forms and negative (relative) indices.
-pub fn parse_obj(text: &str) -> Result<MeshData, String> {
-    let mut mesh = MeshData::default();
-    for (lineno, line) in text.lines().enumerate() {
-        let line = line.split('#').next().unwrap_or("");
-        let mut words = line.split_whitespace();
-        let Some(tag) = words.next() else { continue };
-        let at = |msg: String| format!("line {}: {msg}", lineno + 1);
-        match tag {
-            "v" => {
-                let mut c = [0.0f32; 3];
-                for (i, slot) in c.iter_mut().enumerate() {
-                    let w = words
-                        .next()
-                        .ok_or_else(|| at(format!("vertex needs 3 coordinates, found {i}")))?;
-                    *slot = w
-                        .parse::<f32>()
-                        .map_err(|_| at(format!("`{w}` is not a number")))?;
-                    if !slot.is_finite() {
-                        return Err(at(format!("vertex coordinate `{w}` is not finite")));
-                    }
-                }
-                mesh.vertices.push(Vector::new(c[0], c[1], c[2]));
-            }
-            "f" => {
-                let mut corners = Vec::with_capacity(4);
-                for w in words {
-                    let first = w.split('/').next().unwrap_or("");
-                    let idx: i64 = first
-                        .parse()
-                        .map_err(|_| at(format!("face index `{w}` is not an integer")))?;
-                    let n = mesh.vertices.len() as i64;
-                    let resolved = if idx > 0 { idx - 1 } else { n + idx };
-                    if idx == 0 || resolved < 0 || resolved >= n {
-                        return Err(at(format!(
-                            "face index {idx} out of range (1..={n} vertices so far)"
-                        )));
-                    }
-                    corners.push(resolved as u32);
-                }
-                if corners.len() < 3 {
-                    return Err(at(format!(
-                        "face needs at least 3 corners, found {}",
-                        corners.len()
-                    )));
-                }
-                for k in 1..corners.len() - 1 {
-                    mesh.triangles
-                        .push([corners[0], corners[k], corners[k + 1]]);
-                }
-            }
-            _ => {} // vt, vn, o, g, s, usemtl, mtllib...: not needed for geometry
-        }
-    }
-    Ok(mesh)
-}
-
-/// Parses an STL file, ASCII (`solid ... facet ... vertex x y z ...`) or binary (80-byte header,
-/// triangle count, 50 bytes per triangle). A file starting with `solid` whose size matches the
-/// binary layout exactly is read as binary (some exporters write `solid` in binary headers).
-pub fn parse_stl(bytes: &[u8]) -> Result<MeshData, String> {
-    let binary_size_matches = bytes.len() >= 84 && {
-        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
-        n.checked_mul(50).and_then(|b| b.checked_add(84)) == Some(bytes.len())
-    };
-    let looks_ascii = bytes.trim_ascii_start().starts_with(b"solid");
-    if looks_ascii && !binary_size_matches {
-        parse_stl_ascii(&String::from_utf8_lossy(bytes))
-    } else {
-        parse_stl_binary(bytes)
-    }
-}
-
-fn parse_stl_binary(bytes: &[u8]) -> Result<MeshData, String> {
-    if bytes.len() < 84 {
-        return Err(format!(
-            "binary STL is {} bytes, shorter than its 84-byte header",
-            bytes.len()
-        ));
-    }
-    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
-    let need = 84 + n * 50;
-    if bytes.len() < need {
-        return Err(format!(
-            "binary STL declares {n} triangles ({need} bytes) but has {} bytes",
-            bytes.len()
-        ));
-    }
-    let mut mesh = MeshData::default();
-    let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
-    for t in 0..n {
-        let base = 84 + t * 50 + 12; // skip the facet normal
-        let first = mesh.vertices.len() as u32;
-        for k in 0..3 {
-            let o = base + k * 12;
-            let v = Vector::new(f(o), f(o + 4), f(o + 8));
-            if !v.is_finite() {
-                return Err(format!("triangle {t} (byte {o}) has a non-finite vertex"));
-            }
-            mesh.vertices.push(v);
-        }
-        mesh.triangles.push([first, first + 1, first + 2]);
-    }
-    Ok(mesh)
-}
-
-fn parse_stl_ascii(text: &str) -> Result<MeshData, String> {
-    let mut mesh = MeshData::default();
-    let mut pending: Vec<u32> = Vec::with_capacity(3);
-    for (lineno, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        let at = |msg: String| format!("line {}: {msg}", lineno + 1);
-        match words.next() {
-            Some("vertex") => {
-                let mut c = [0.0f32; 3];
-                for (i, slot) in c.iter_mut().enumerate() {
-                    let w = words
-                        .next()
-                        .ok_or_else(|| at(format!("vertex needs 3 coordinates, found {i}")))?;
-                    *slot = w
-                        .parse::<f32>()
-                        .map_err(|_| at(format!("`{w}` is not a number")))?;
-                    if !slot.is_finite() {
-                        return Err(at(format!("vertex coordinate `{w}` is not finite")));
-                    }
-                }
-                pending.push(mesh.vertices.len() as u32);
-                mesh.vertices.push(Vector::new(c[0], c[1], c[2]));
-            }
-            Some("endloop") => {
-                if pending.len() < 3 {
-                    return Err(at(format!(
-                        "facet loop has {} vertices, expected 3",
-                        pending.len()
-                    )));
-                }
-                for k in 1..pending.len() - 1 {
-                    mesh.triangles
-                        .push([pending[0], pending[k], pending[k + 1]]);
-                }
-                pending.clear();
-            }
-            _ => {}
-        }
-    }
-    if !pending.is_empty() {
-        return Err("file ends inside a facet loop (missing `endloop`)".into());
-    }
-    Ok(mesh)
 }
 
 #[cfg(test)]
@@ -205,21 +224,22 @@ mod tests {
 
     #[test]
     fn obj_quad_is_fanned() {
-        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1 2/2 3//3 -1\n").unwrap();
-        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1 2/2 3//3 -1\n";
+        let m = parse_mesh(obj.as_bytes(), Path::new("q.obj")).unwrap();
+        assert_eq!(m.triangles.len(), 2);
     }
 
     #[test]
     fn obj_bad_index_names_line() {
-        let e = parse_obj("v 0 0 0\nf 1 2 3\n").unwrap_err();
-        assert!(e.starts_with("line 2:"), "{e}");
+        let e = parse_mesh(b"v 0 0 0\nf 1 2 3\n", Path::new("q.obj")).unwrap_err();
+        assert!(e.contains("obj"), "{e}");
     }
 
     #[test]
     fn stl_ascii_and_binary_agree() {
         let ascii = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
                      vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
-        let a = parse_stl(ascii.as_bytes()).unwrap();
+        let a = parse_mesh(ascii.as_bytes(), Path::new("t.stl")).unwrap();
         let mut bin = vec![0u8; 80];
         bin.extend_from_slice(&1u32.to_le_bytes());
         bin.extend_from_slice(&[0u8; 12]);
@@ -229,9 +249,10 @@ mod tests {
             }
         }
         bin.extend_from_slice(&[0u8; 2]);
-        let b = parse_stl(&bin).unwrap();
+        let b = parse_mesh(&bin, Path::new("t.STL")).unwrap();
         assert_eq!(a.vertices, b.vertices);
         assert_eq!(a.triangles, b.triangles);
-        assert!(parse_stl(&bin[..100]).is_err());
+        let e = parse_mesh(&bin[..100], Path::new("t.stl")).unwrap_err();
+        assert!(e.contains("declares 1 triangles"), "{e}");
     }
 }

@@ -91,6 +91,11 @@ struct SceneHeader {
     description: Option<String>,
     /// Region covered by the mightability maps; default: the objects' bounds plus a margin.
     bounds: Option<BoundsSpec>,
+    /// Folders searched for the ROS packages that `package://` mesh names in the agents' URDFs
+    /// name (relative to the scene file), after the command line's `--package-path` folders and
+    /// before `ROS_PACKAGE_PATH`.
+    #[serde(default)]
+    package_path: Vec<String>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -206,6 +211,12 @@ struct AgentSpec {
     sitting: bool,
     colour: Option<[u8; 3]>,
     effort: Option<EffortSpec>,
+    /// Links whose collision meshes collide as their convex hull, whatever the rule says.
+    #[serde(default)]
+    hull_links: Vec<String>,
+    /// Links whose collision meshes are decomposed into convex pieces, whatever the rule says.
+    #[serde(default)]
+    decompose_links: Vec<String>,
 }
 
 /// Optional overrides of an agent's effort parameters (see [`crate::effort::EffortParams`]).
@@ -320,6 +331,8 @@ pub struct AgentSpecResolved {
     pub sitting: bool,
     pub colour: [u8; 3],
     pub(crate) effort: EffortSpec,
+    /// Links whose collision meshes are made by a mode other than the rule's.
+    pub convex_modes: Vec<(String, crate::agent::ConvexMode)>,
 }
 
 /// The immutable part of a world, loaded from a scene file.
@@ -338,6 +351,8 @@ pub struct Scene {
     pub agents: Vec<AgentSpecResolved>,
     /// Region for grids (mightability maps); explicit or derived.
     pub bounds: Option<Aabb>,
+    /// The scene's `package_path` folders, resolved against its folder.
+    pub package_path: Vec<PathBuf>,
     object_index: HashMap<String, usize>,
 }
 
@@ -455,6 +470,12 @@ impl Scene {
             initial_poses,
             agents,
             bounds,
+            package_path: file
+                .scene
+                .package_path
+                .iter()
+                .map(|d| base_dir.join(d))
+                .collect(),
             object_index,
         })
     }
@@ -655,7 +676,33 @@ fn agent_spec(
             KindSpec::Human => [225, 180, 150],
         }),
         effort,
+        convex_modes: convex_modes(ck, a, at)?,
     })
+}
+
+/// The links a scene names in `hull_links` and `decompose_links` (in neither twice).
+fn convex_modes(
+    ck: &Checker,
+    a: &AgentSpec,
+    at: &str,
+) -> Result<Vec<(String, crate::agent::ConvexMode)>, SceneError> {
+    use crate::agent::ConvexMode;
+    let mut modes: Vec<(String, ConvexMode)> = Vec::new();
+    for (key, list, mode) in [
+        ("hull_links", &a.hull_links, ConvexMode::Hull),
+        ("decompose_links", &a.decompose_links, ConvexMode::Decompose),
+    ] {
+        for link in list {
+            if modes.iter().any(|(l, _)| l == link) {
+                return Err(ck.err(
+                    &format!("{at}.{key}"),
+                    format!("link `{link}` is named twice in hull_links/decompose_links"),
+                ));
+            }
+            modes.push((link.clone(), mode));
+        }
+    }
+    Ok(modes)
 }
 
 /// The scene's optional bounds, checked.

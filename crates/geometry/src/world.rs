@@ -18,7 +18,7 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
-use crate::agent::{AgentModel, KinematicChain};
+use crate::agent::{AgentModel, KinematicChain, MeshOptions, PackagePath};
 use crate::effort::EffortParams;
 use crate::scene::{
     AgentId, AgentKind, AgentSpecResolved, ObjectId, ObjectModel, Scene, SceneError,
@@ -212,11 +212,34 @@ impl World {
         let mut states = Vec::with_capacity(scene.agents.len());
         for (i, spec) in scene.agents.iter().enumerate() {
             let at = format!("agents[{i}]");
-            let model = AgentModel::from_urdf_str(
+            let meshes = MeshOptions {
+                packages: PackagePath {
+                    urdf_dir: spec
+                        .urdf
+                        .parent()
+                        .map(Path::to_path_buf)
+                        .unwrap_or_default(),
+                    scene_dirs: scene.package_path.clone(),
+                },
+                modes: spec.convex_modes.iter().cloned().collect(),
+            };
+            let model = AgentModel::from_urdf_str_with(
                 &read_model(&spec.urdf, &scene, &at)?,
                 &spec.urdf.display().to_string(),
+                &meshes,
             )
             .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            for (link, _) in &spec.convex_modes {
+                if model.link_id(link).is_err() {
+                    return Err(scene.error(
+                        &at,
+                        format!(
+                            "hull_links/decompose_links: no link `{link}` in {}",
+                            spec.urdf.display()
+                        ),
+                    ));
+                }
+            }
             let model = match &spec.srdf {
                 Some(path) => model
                     .with_srdf_file(path)

@@ -105,7 +105,11 @@ const BAD: &[(&str, Option<usize>, &str)] = &[
         Some(4),
         "connects link 'base' to itself",
     ),
-    ("mesh_geometry.urdf", Some(3), "meshes are not supported"),
+    (
+        "mesh_geometry.urdf",
+        Some(3),
+        "collision mesh 'package://pr2/base.stl': package `pr2` not found",
+    ),
     (
         "mimic_unknown_joint.urdf",
         Some(5),

@@ -38,13 +38,21 @@ pub struct SceneInput<'a> {
 /// Loads a scene; with `allow_contact`, objects that start inside one another are a warning
 /// on standard error (`--allow-initial-contact`), not an error. A robot inside furniture
 /// stays an error.
+/// What an agent's URDF loaded past (a visual mesh that names no file) is a warning too.
 pub fn load_world(path: &Path, allow_contact: bool) -> Result<World, SceneError> {
-    if !allow_contact {
-        return World::load(path);
-    }
-    let (world, warning) = World::load_allowing_contact(path)?;
-    if let Some(w) = warning {
-        eprintln!("warning: {w} (read anyway: --allow-initial-contact)");
+    let world = if allow_contact {
+        let (world, warning) = World::load_allowing_contact(path)?;
+        if let Some(w) = warning {
+            eprintln!("warning: {w} (read anyway: --allow-initial-contact)");
+        }
+        world
+    } else {
+        World::load(path)?
+    };
+    for id in world.agent_ids() {
+        for w in world.agent(id).model.load_warnings() {
+            eprintln!("warning: {w}");
+        }
     }
     Ok(world)
 }

@@ -5,6 +5,8 @@ use super::*;
 struct Ctx<'a> {
     text: &'a str,
     source_name: &'a str,
+    meshes: &'a MeshOptions,
+    warnings: std::cell::RefCell<Vec<String>>,
 }
 
 impl Ctx<'_> {
@@ -74,11 +76,13 @@ fn to_pose(o: &urdf_rs::Pose) -> Pose {
     )
 }
 
+/// The collision shapes of one URDF `<collision>` element: one for a primitive, one per convex
+/// piece for a mesh.
 fn convert_geometry(
     ctx: &Ctx,
     link: &str,
     c: &urdf_rs::Collision,
-) -> Result<CollisionShape, ModelError> {
+) -> Result<Vec<CollisionShape>, ModelError> {
     let bad = |m: String| ctx.invalid("link", link, format!("link '{link}': collision {m}"));
     if !finite3(&c.origin.xyz) || !finite3(&c.origin.rpy) {
         return Err(bad(format!(
@@ -147,23 +151,111 @@ fn convert_geometry(
                 r + l / 2.0,
             )
         }
-        urdf_rs::Geometry::Mesh { filename, .. } => {
-            return Err(bad(format!(
-                "uses mesh '{filename}': meshes are not supported in agent models; \
-                 use box, sphere, cylinder or capsule"
-            )));
+        urdf_rs::Geometry::Mesh { filename, scale } => {
+            return collision_mesh(ctx, link, filename, scale.as_ref(), origin).map_err(bad);
         }
     };
-    Ok(CollisionShape {
+    Ok(vec![CollisionShape {
         local_pose,
         shape,
         primitive,
         bounding_radius,
-    })
+    }])
 }
 
-pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelError> {
-    let ctx = Ctx { text, source_name };
+/// The file a mesh element names, which must exist; the error names the URI and every place
+/// searched.
+fn mesh_path(ctx: &Ctx, uri: &str) -> Result<std::path::PathBuf, String> {
+    let path = ctx
+        .meshes
+        .packages
+        .resolve(uri)
+        .map_err(|e| format!("mesh '{uri}': {}", e.message))?;
+    if path.is_file() {
+        return Ok(path);
+    }
+    let how = if uri.starts_with("package://") {
+        "in its package"
+    } else if uri.starts_with("file://") {
+        "as an absolute path"
+    } else {
+        "relative to the URDF's folder"
+    };
+    Err(format!(
+        "mesh '{uri}': file `{}` ({how}) not found",
+        path.display()
+    ))
+}
+
+/// A collision mesh as convex pieces ([`convex`]), checked for numbers and caps.
+fn collision_mesh(
+    ctx: &Ctx,
+    link: &str,
+    uri: &str,
+    scale: Option<&urdf_rs::Vec3>,
+    origin: Pose,
+) -> Result<Vec<CollisionShape>, String> {
+    let scale = scale.map(|s| s.0).unwrap_or([1.0; 3]);
+    if !scale.iter().all(|s| s.is_finite() && *s != 0.0) {
+        return Err(format!(
+            "mesh '{uri}': scale {scale:?} must be finite and non-zero"
+        ));
+    }
+    let path = mesh_path(ctx, uri)?;
+    let mode = ctx
+        .meshes
+        .modes
+        .get(link)
+        .copied()
+        .unwrap_or(ConvexMode::Auto);
+    let mesh = convex::convex_mesh(&path, scale.map(|s| s as f32), mode)
+        .map_err(|e| format!("mesh '{uri}' ({}): {e}", path.display()))?;
+    Ok(mesh
+        .pieces
+        .iter()
+        .map(|piece| CollisionShape {
+            local_pose: convex::piece_pose(origin, piece),
+            shape: piece.shape.clone(),
+            primitive: Primitive::Convex {
+                vertices: piece
+                    .shape
+                    .as_convex_polyhedron()
+                    .map_or(0, |p| p.points().len()),
+                pieces: mesh.pieces.len(),
+            },
+            bounding_radius: piece.radius,
+        })
+        .collect())
+}
+
+/// A visual mesh that names no file is a warning: planning does not need it.
+fn check_visuals(ctx: &Ctx, link: &urdf_rs::Link) {
+    for v in &link.visual {
+        if let urdf_rs::Geometry::Mesh { filename, .. } = &v.geometry
+            && let Err(e) = mesh_path(ctx, filename)
+        {
+            let line = locate(ctx.text, "link", &link.name)
+                .map(|l| format!(":{l}"))
+                .unwrap_or_default();
+            ctx.warnings.borrow_mut().push(format!(
+                "{}{line}: link '{}': visual {e} (not needed for planning)",
+                ctx.source_name, link.name
+            ));
+        }
+    }
+}
+
+pub(super) fn load(
+    text: &str,
+    source_name: &str,
+    meshes: &MeshOptions,
+) -> Result<AgentModel, ModelError> {
+    let ctx = Ctx {
+        text,
+        source_name,
+        meshes,
+        warnings: Default::default(),
+    };
     let robot = parse_robot(text, source_name)?;
     let (urdf_link, urdf_joint) = unique_names(&ctx, &robot)?;
     let tree = Tree::of(&ctx, &robot, &urdf_link)?;
@@ -194,6 +286,7 @@ pub(super) fn load(text: &str, source_name: &str) -> Result<AgentModel, ModelErr
         dof_joints: dofs.joints,
         dof_velocity_limits: dofs.velocity_limits,
         dof_acceleration_limits: dofs.acceleration_limits,
+        warnings: ctx.warnings.into_inner(),
     })
 }
 
@@ -416,11 +509,11 @@ impl Tree {
         let mut links = Vec::with_capacity(order.len());
         for &old in order {
             let l = &robot.links[old];
-            let collisions = l
-                .collision
-                .iter()
-                .map(|c| convert_geometry(ctx, &l.name, c))
-                .collect::<Result<Vec<_>, _>>()?;
+            let mut collisions = Vec::with_capacity(l.collision.len());
+            for c in &l.collision {
+                collisions.extend(convert_geometry(ctx, &l.name, c)?);
+            }
+            check_visuals(ctx, l);
             let parent = parent_joint_of[old]
                 .map(|j| new_index[urdf_link[robot.joints[j].parent.link.as_str()]]);
             links.push(Link {

@@ -3,16 +3,23 @@
 //! the link pairs that may touch. Nothing in the code names a link or joint of a particular robot
 //! or person: it asks the SRDF.
 //!
-//! Elements read (others, such as `virtual_joint` or `passive_joint`, are ignored):
+//! Elements read (others are ignored):
 //! * `<group name="..">` with `<chain base_link=".." tip_link=".."/>`, `<joint name=".."/>`,
 //!   `<link name=".."/>`. Groups htngtp gives a meaning to: an **arm** is any group that an
 //!   `end_effector` names as its `parent_group` (its chain runs from the shoulder's parent to the
 //!   tool frame or hand); `head`: a chain whose tip is the eye or camera link, its first two
 //!   movable joints pan and tilt; `torso_yaw`, `torso_pitch`, `torso_lift`: one joint each.
+//!   A group's `<group name=".."/>` children are its subgroups (declared groups).
+//! * `<virtual_joint name=".." type="planar|floating|fixed" parent_frame=".." child_link=".."/>`:
+//!   how the root link is placed in the world (the scene places it: htngtp's base is planar);
+//!   groups may name the virtual joint among their joints. `<passive_joint name=".."/>`: a
+//!   joint no controller drives (recorded).
 //! * `<end_effector name=".." parent_link=".." group=".." parent_group=".."/>`: the hand or
-//!   gripper of the arm `parent_group`; its `group`'s first joint that mimics none is the
+//!   gripper of the arm `parent_group` (without one, as MoveIt does: the group whose chain ends
+//!   at `parent_link`); its `group`'s first joint that mimics none is the
 //!   gripper's joint (none for a person's hand).
 //! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
+//!   (a mimic joint's value is skipped: it follows its master)
 //!   (`standing` for a person who may stand up, the effort level that allows it).
 //! * `<disable_collisions link1=".." link2=".." reason=".."/>`: link pairs that may touch
 //!   (left out of self-collision checks, besides the pairs the model's own analysis leaves out).
@@ -30,6 +37,8 @@ pub struct Group {
     pub chain: Option<(String, String)>,
     pub joints: Vec<String>,
     pub links: Vec<String>,
+    /// Groups it includes (`<group name=".."/>` children).
+    pub subgroups: Vec<String>,
 }
 
 /// A hand or gripper at the end of an arm.
@@ -63,6 +72,10 @@ pub struct Semantics {
     pub group_states: Vec<GroupState>,
     /// `(link1, link2)` pairs that may touch.
     pub disabled_collisions: Vec<(String, String)>,
+    /// The virtual joints: name, type (`planar`, `floating`, `fixed`) and child link.
+    pub virtual_joints: Vec<(String, String, String)>,
+    /// Joints no controller drives.
+    pub passive_joints: Vec<String>,
 }
 
 impl Semantics {
@@ -137,9 +150,25 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
         source_name: source_name.to_string(),
         ..Semantics::default()
     };
+    for e in root.children.iter().filter(|e| e.name == "virtual_joint") {
+        s.virtual_joints.push(virtual_joint(&src, e, model)?);
+    }
     for e in &root.children {
         match e.name.as_str() {
-            "group" => s.groups.push(group(&src, e, model)?),
+            "group" => {
+                s.groups.push(group(&src, e, model, &s.virtual_joints)?);
+                // MoveIt's setup assistant may write a passive joint inside a group.
+                for c in e.children.iter().filter(|c| c.name == "passive_joint") {
+                    let (name, at) = src.attr(c, "name")?;
+                    known_joint(&src, model, name, at)?;
+                    s.passive_joints.push(name.to_string());
+                }
+            }
+            "passive_joint" => {
+                let (name, at) = src.attr(e, "name")?;
+                known_joint(&src, model, name, at)?;
+                s.passive_joints.push(name.to_string());
+            }
             "end_effector" => s.end_effectors.push(end_effector(&src, e, model)?),
             "group_state" => s.group_states.push(group_state(&src, e, model)?),
             "disable_collisions" => {
@@ -152,8 +181,44 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
             _ => {}
         }
     }
+    infer_parent_groups(&mut s);
     cross_check(&src, &root, &s)?;
     Ok(s)
+}
+
+/// An end effector without `parent_group` ends the group whose chain's tip is its
+/// `parent_link`, as MoveIt infers it.
+fn infer_parent_groups(s: &mut Semantics) {
+    for i in 0..s.end_effectors.len() {
+        if s.end_effectors[i].parent_group.is_some() {
+            continue;
+        }
+        let link = &s.end_effectors[i].parent_link;
+        let owner = s
+            .groups
+            .iter()
+            .find(|g| g.chain.as_ref().is_some_and(|(_, tip)| tip == link))
+            .map(|g| g.name.clone());
+        s.end_effectors[i].parent_group = owner;
+    }
+}
+
+fn virtual_joint(
+    src: &Source,
+    e: &Element,
+    model: &AgentModel,
+) -> Result<(String, String, String), ModelError> {
+    let (name, _) = src.attr(e, "name")?;
+    let (kind, kat) = src.attr(e, "type")?;
+    if !matches!(kind, "planar" | "floating" | "fixed") {
+        return Err(src.err(
+            kat,
+            format!("virtual joint `{name}`: type `{kind}` (expected planar, floating or fixed)"),
+        ));
+    }
+    let (child, cat) = src.attr(e, "child_link")?;
+    known_link(src, model, child, cat)?;
+    Ok((name.to_string(), kind.to_string(), child.to_string()))
 }
 
 fn known_link(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<(), ModelError> {
@@ -174,7 +239,12 @@ fn known_joint(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<
     })
 }
 
-fn group(src: &Source, e: &Element, model: &AgentModel) -> Result<Group, ModelError> {
+fn group(
+    src: &Source,
+    e: &Element,
+    model: &AgentModel,
+    virtual_joints: &[(String, String, String)],
+) -> Result<Group, ModelError> {
     let mut g = Group {
         name: src.attr(e, "name")?.0.to_string(),
         ..Group::default()
@@ -193,9 +263,12 @@ fn group(src: &Source, e: &Element, model: &AgentModel) -> Result<Group, ModelEr
             }
             "joint" => {
                 let (name, at) = src.attr(c, "name")?;
-                known_joint(src, model, name, at)?;
+                if !virtual_joints.iter().any(|v| v.0 == name) {
+                    known_joint(src, model, name, at)?;
+                }
                 g.joints.push(name.to_string());
             }
+            "group" => g.subgroups.push(src.attr(c, "name")?.0.to_string()),
             "link" => {
                 let (name, at) = src.attr(c, "name")?;
                 known_link(src, model, name, at)?;
@@ -234,6 +307,10 @@ fn group_state(src: &Source, e: &Element, model: &AgentModel) -> Result<GroupSta
             .ok()
             .filter(|v: &f32| v.is_finite())
             .ok_or_else(|| src.err(vat, format!("joint `{name}`: `{text}` is not a number")))?;
+        if model.joints()[j].mimic.is_some() {
+            // MoveIt's postures list mimic joints too; their value follows their master's.
+            continue;
+        }
         let Some(dof) = model.joints()[j].dof else {
             return Err(src.err(
                 at,
@@ -262,6 +339,13 @@ fn cross_check(src: &Source, root: &Element, s: &Semantics) -> Result<(), ModelE
         for key in ["group", "parent_group"] {
             if let Some((g, at)) = e.attr(key).filter(|(g, _)| !declared(g)) {
                 return Err(src.err(at, format!("no group `{g}` is declared")));
+            }
+        }
+    }
+    for e in root.children.iter().filter(|e| e.name == "group") {
+        for c in e.children.iter().filter(|c| c.name == "group") {
+            if let Some((g, at)) = c.attr("name").filter(|(g, _)| !declared(g)) {
+                return Err(src.err(at, format!("subgroup `{g}` is not declared")));
             }
         }
     }

@@ -1,0 +1,131 @@
+//! The real PR2 of `../shared/robots` (ROS's description and MoveIt's SRDF, unchanged) in the
+//! library scene, through the binary: `facts` reads it, and a plan JSON describes its links as
+//! the convex pieces that were checked, which `htngtp check` reads.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const EXE: &str = env!("CARGO_BIN_EXE_htngtp");
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The library scene with the hand-written PR2 replaced by the real one; what htngtp needs
+/// beyond the SRDF (the eye link, the tool frames) is named in the scene.
+fn real_pr2_scene(dir: &Path) -> PathBuf {
+    let robots = root().join("../shared/robots").canonicalize().unwrap();
+    let models = root().join("models").canonicalize().unwrap();
+    let text = std::fs::read_to_string(root().join("domains/library/scene.toml")).unwrap();
+    let pr2 = format!(
+        "\"{}\"\nsrdf = \"{}\"\neye = \"head_mount_kinect_rgb_link\"\nhands = [\"r_gripper_tool_frame\", \"l_gripper_tool_frame\"]",
+        robots.join("pr2_description/urdf/robot.xml").display(),
+        robots.join("pr2_description/srdf/robot.xml").display()
+    );
+    assert!(
+        text.contains("\"../../models/pr2.urdf\""),
+        "the library scene changed"
+    );
+    let text = text
+        .replace("\"../../models/pr2.urdf\"", &pr2)
+        .replace("../../models", &models.display().to_string());
+    let path = dir.join("real-pr2.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(EXE).args(args).output().unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("htngtp-real-pr2-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn facts_read_the_real_pr2() {
+    let dir = scratch("facts");
+    let scene = real_pr2_scene(&dir);
+    let robots = root().join("../shared/robots");
+    let o = run(&[
+        "facts",
+        scene.to_str().unwrap(),
+        "--package-path",
+        robots.to_str().unwrap(),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("For PR2 (robot)"), "{out}");
+    assert!(out.contains("on(grey-book, table)"), "{out}");
+    // Without the package path, the first package:// mesh is not found.
+    let o = run(&["facts", scene.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    if std::env::var_os("ROS_PACKAGE_PATH").is_none() {
+        assert_eq!(o.status.code(), Some(3), "{err}");
+        assert!(
+            err.contains("package `moveit_resources_pr2_description` not found"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn the_plan_json_carries_the_convex_pieces_checked() {
+    let dir = scratch("json");
+    let scene = real_pr2_scene(&dir);
+    let robots = root().join("../shared/robots");
+    let json = dir.join("plan.json");
+    let lib = root().join("domains/library");
+    let o = run(&[
+        "plan",
+        lib.join("domain.hddl").to_str().unwrap(),
+        lib.join("fig4.hddl").to_str().unwrap(),
+        "--scene",
+        scene.to_str().unwrap(),
+        "--package-path",
+        robots.to_str().unwrap(),
+        "--json-out",
+        json.to_str().unwrap(),
+        "--time-limit",
+        "60",
+    ]);
+    assert!(json.is_file(), "{}", String::from_utf8_lossy(&o.stderr));
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let pr2 = plan["scene"]["agents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == "pr2")
+        .unwrap();
+    let meshes: Vec<&serde_json::Value> = pr2["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|l| l["shapes"].as_array().unwrap())
+        .filter_map(|s| s["shape"].get("mesh"))
+        .collect();
+    // Every collision mesh of the URDF is at least one convex piece, each its own shape.
+    assert!(meshes.len() >= 35, "{} mesh shapes", meshes.len());
+    for m in &meshes {
+        assert!(m["vertices"].as_array().unwrap().len() >= 4);
+    }
+    let o = run(&["check", json.to_str().unwrap()]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
