@@ -1,7 +1,9 @@
 //! RRT-Connect queries in the library scene: the PR2's right arm between the configurations
 //! of a real make-accessible solution (approach to the grey book, carrying it to the desk, the
 //! arm's return), each planned from scratch with a fresh seed per iteration; plus one
-//! collision check for scale.
+//! collision check for scale; and a query that cannot connect (a wall across a 7-joint space,
+//! validity free of geometry), whose cost is the trees' nearest-neighbour searches up to the
+//! node limit.
 //!
 //! Run: `cargo bench -p gtp --bench rrt`. Target: median < 1 ms per query.
 
@@ -110,5 +112,37 @@ fn bench_rrt(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_rrt);
+/// A query whose goal lies behind a wall through the whole space: the trees grow to
+/// `max_nodes` and the query fails; the time is the search's own (sampling, nearest
+/// neighbours, extension), not the geometry's.
+fn bench_unconnectable(c: &mut Criterion) {
+    use gtp::rrt::{self, JointSpace, RrtParams};
+    let space = JointSpace::new(
+        &[(-2.5, 2.5, false); 6]
+            .iter()
+            .copied()
+            .chain([(0.0, 0.0, true)])
+            .collect::<Vec<_>>(),
+    );
+    let (start, goal) = (vec![-2.0; 7], vec![2.0; 7]);
+    let valid = |q: &[f32]| q[0].abs() > 0.3;
+    let mut g = c.benchmark_group("rrt unconnectable");
+    g.sample_size(10);
+    for max_nodes in [1000, 5000] {
+        let params = RrtParams {
+            max_nodes,
+            time_limit: std::time::Duration::from_secs(60),
+            ..RrtParams::default()
+        };
+        g.bench_function(format!("{max_nodes} nodes"), |b| {
+            b.iter(|| {
+                let mut rng = fastrand::Rng::with_seed(1);
+                black_box(rrt::plan(&space, &start, &goal, valid, &params, &mut rng).is_err())
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_rrt, bench_unconnectable);
 criterion_main!(benches);

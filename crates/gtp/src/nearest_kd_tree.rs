@@ -8,8 +8,10 @@
 //! spread) each time it doubles, so insertion order cannot degrade it for long.
 //!
 //! The answer is exactly the linear scan's: the first index of least squared distance, the
-//! distance computed by the caller's function on the stored configurations. Pruning uses a
-//! lower bound on one axis with a small slack, so rounding cannot prune the true nearest.
+//! distance computed by the caller's function on the stored configurations. A subtree is pruned
+//! when the squared distance to its cell (the sum over axes of the squared offset to the cell's
+//! interval, around the circle for continuous axes) exceeds the best so far, with a small slack
+//! so that rounding cannot prune the true nearest.
 
 use std::f32::consts::PI;
 
@@ -21,6 +23,17 @@ const SLACK: f32 = 1e-4;
 
 /// Rebuilt balanced first at this size, then at each doubling.
 const FIRST_BUILD: usize = 32;
+
+/// One nearest-neighbour query in progress.
+struct Query<F> {
+    /// The query's coordinates, continuous ones folded.
+    key: Vec<f32>,
+    /// Per axis, a lower bound on the distance from the query to the current cell.
+    offsets: Vec<f32>,
+    /// The least squared distance so far and its index.
+    best: (f32, usize),
+    distance2: F,
+}
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -101,45 +114,48 @@ impl KdTree {
         if self.root == NONE {
             return None;
         }
-        let key = self.key(q);
-        let mut best = (f32::INFINITY, usize::MAX);
-        let mut stack = vec![self.root];
-        // Depth first, the near side first: each far side waits with its bound.
-        let mut far: Vec<(u32, f32)> = Vec::new();
-        loop {
-            while let Some(n) = stack.pop() {
-                let node = self.nodes[n as usize];
-                let p = node.point as usize;
-                let d = distance2(p);
-                if d < best.0 || (d == best.0 && p < best.1) {
-                    best = (d, p);
-                }
-                let axis = node.axis as usize;
-                let split = self.coord(node.point, axis);
-                let below = key[axis] < split;
-                let (near, other) = if below {
-                    (node.left, node.right)
-                } else {
-                    (node.right, node.left)
-                };
-                if other != NONE {
-                    let bound = self.bound(axis, key[axis], split, below);
-                    far.push((other, bound * bound));
-                }
-                if near != NONE {
-                    stack.push(near);
-                }
-            }
-            match far.pop() {
-                None => break,
-                Some((n, b2)) => {
-                    if b2 <= best.0 * (1.0 + SLACK) + f32::EPSILON {
-                        stack.push(n);
-                    }
-                }
-            }
+        let mut query = Query {
+            key: self.key(q),
+            offsets: vec![0.0; self.dim],
+            best: (f32::INFINITY, usize::MAX),
+            distance2,
+        };
+        self.search(self.root, 0.0, &mut query);
+        Some(query.best.1)
+    }
+
+    /// Visits the subtree of `n`, whose cell lies at least `sqrt(cell2)` from the query (the
+    /// sum of the squared per-axis offsets in `query.offsets`), the query's side first.
+    fn search<F: Fn(usize) -> f32>(&self, n: u32, cell2: f32, query: &mut Query<F>) {
+        let node = self.nodes[n as usize];
+        let p = node.point as usize;
+        let d = (query.distance2)(p);
+        if d < query.best.0 || (d == query.best.0 && p < query.best.1) {
+            query.best = (d, p);
         }
-        Some(best.1)
+        let axis = node.axis as usize;
+        let (q, split) = (query.key[axis], self.coord(node.point, axis));
+        let below = q < split;
+        let (near, other) = if below {
+            (node.left, node.right)
+        } else {
+            (node.right, node.left)
+        };
+        if near != NONE {
+            self.search(near, cell2, query);
+        }
+        if other == NONE {
+            return;
+        }
+        // The other side's cell: this axis's offset grows to the split plane's.
+        let old = query.offsets[axis];
+        let new = self.bound(axis, q, split, below).max(old);
+        let other2 = cell2 - old * old + new * new;
+        if other2 <= query.best.0 * (1.0 + SLACK) + f32::EPSILON {
+            query.offsets[axis] = new;
+            self.search(other, other2, query);
+            query.offsets[axis] = old;
+        }
     }
 
     /// A lower bound on the distance along `axis` from the query coordinate `q` to the side of
