@@ -14,6 +14,78 @@ use super::compile::{CEffect, CFormula, CLit, CNum, CTerm, Compiled};
 /// An unbound slot.
 pub(crate) const UNBOUND: u32 = u32::MAX;
 
+/// Where an enumeration of [`Eval::solve_from`] stands: the position in each choice of the
+/// join (candidate facts, objects of a type) that led to one binding.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Cursor(Vec<u32>);
+
+/// How an enumeration of [`Eval::solve_from`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Enumerated {
+    /// The callback asked to stop: more bindings may follow.
+    Stopped,
+    /// Every binding was given.
+    Exhausted,
+    /// The poll asked to give up: the bindings given are not all of them.
+    Aborted,
+}
+
+/// Join steps between two polls of [`Eval::solve_from`]'s `poll`.
+const POLL_EVERY: u32 = 4096;
+
+/// The state of one enumeration: the choice path, the cursor it resumes after, the poll.
+#[derive(Default)]
+struct Control<'p> {
+    /// Positions in the enclosing choices, outermost first.
+    path: Vec<u32>,
+    /// The path of the binding to resume after.
+    resume: Vec<u32>,
+    /// Still descending along `resume` (each choice starts at its position there).
+    resuming: bool,
+    poll: Option<&'p dyn Fn() -> bool>,
+    steps: u32,
+    aborted: bool,
+}
+
+impl Control<'_> {
+    /// Enters a choice: the position to start from (the resumed one's, or the first).
+    fn enter(&mut self) -> usize {
+        let depth = self.path.len();
+        self.path.push(0);
+        if self.resuming {
+            self.resume.get(depth).map_or(0, |&p| p as usize)
+        } else {
+            0
+        }
+    }
+
+    /// The current choice is at position `pos`.
+    fn at(&mut self, pos: usize) {
+        if let Some(last) = self.path.last_mut() {
+            *last = pos as u32;
+        }
+    }
+
+    fn leave(&mut self) {
+        self.path.pop();
+    }
+
+    /// Whether to stop the whole enumeration: the poll said so (now or before).
+    fn give_up(&mut self) -> bool {
+        if self.aborted {
+            return true;
+        }
+        self.steps += 1;
+        if self.steps % POLL_EVERY == 0
+            && let Some(poll) = self.poll
+            && poll()
+        {
+            self.aborted = true;
+        }
+        self.aborted
+    }
+}
+
 /// Read-only evaluation context.
 pub(crate) struct Eval<'a> {
     pub c: &'a Compiled,
@@ -120,7 +192,44 @@ impl Eval<'_> {
         cb: &mut dyn FnMut(&[u32]) -> bool,
     ) -> bool {
         let mut done = vec![false; lits.len()];
-        self.solve_rec(lits, b, need, &mut done, cb)
+        let mut ctl = Control::default();
+        self.solve_rec(lits, b, need, &mut done, &mut ctl, &mut |bb, _| cb(bb))
+    }
+
+    /// [`Eval::solve`] one piece at a time: the bindings after the one whose [`Cursor`] is
+    /// `after` (from the first when `None`), in the same order, until `cb` returns `true`;
+    /// then also the cursor of the binding it stopped at. Between two calls the state must be
+    /// the same. `poll` is asked every few thousand steps of the join whether to give up (a
+    /// limit was reached).
+    pub fn solve_from(
+        &self,
+        lits: &[CLit],
+        b: &mut [u32],
+        need: &[u16],
+        after: Option<&Cursor>,
+        poll: &dyn Fn() -> bool,
+        cb: &mut dyn FnMut(&[u32]) -> bool,
+    ) -> (Enumerated, Option<Cursor>) {
+        let mut done = vec![false; lits.len()];
+        let mut ctl = Control {
+            resume: after.map(|c| c.0.clone()).unwrap_or_default(),
+            resuming: after.is_some(),
+            poll: Some(poll),
+            ..Control::default()
+        };
+        let mut last = None;
+        let stopped = self.solve_rec(lits, b, need, &mut done, &mut ctl, &mut |bb, path| {
+            let stop = cb(bb);
+            if stop {
+                last = Some(Cursor(path.to_vec()));
+            }
+            stop
+        });
+        match (ctl.aborted, stopped) {
+            (true, _) => (Enumerated::Aborted, None),
+            (false, true) => (Enumerated::Stopped, last),
+            (false, false) => (Enumerated::Exhausted, None),
+        }
     }
 
     fn solve_rec(
@@ -129,7 +238,8 @@ impl Eval<'_> {
         b: &mut [u32],
         need: &[u16],
         done: &mut [bool],
-        cb: &mut dyn FnMut(&[u32]) -> bool,
+        ctl: &mut Control,
+        cb: &mut dyn FnMut(&[u32], &[u32]) -> bool,
     ) -> bool {
         // Test every literal that is fully bound (remember which, to unmark them after).
         let mut tested_mask: u64 = 0;
@@ -149,7 +259,7 @@ impl Eval<'_> {
                 }
             }
         }
-        let stop = ok && self.extend(lits, b, need, done, cb);
+        let stop = ok && self.extend(lits, b, need, done, ctl, cb);
         let mut m = tested_mask;
         while m != 0 {
             done[m.trailing_zeros() as usize] = false;
@@ -167,8 +277,12 @@ impl Eval<'_> {
         b: &mut [u32],
         need: &[u16],
         done: &mut [bool],
-        cb: &mut dyn FnMut(&[u32]) -> bool,
+        ctl: &mut Control,
+        cb: &mut dyn FnMut(&[u32], &[u32]) -> bool,
     ) -> bool {
+        if ctl.give_up() {
+            return true;
+        }
         // The positive atom with the fewest candidates (static atoms through the index).
         let mut best: Option<(usize, &[u32])> = None;
         for (i, l) in lits.iter().enumerate() {
@@ -200,7 +314,9 @@ impl Eval<'_> {
             done[i] = true;
             let mut stop = false;
             let mut bound: [u16; 16] = [0; 16];
-            for &fid in cands {
+            let first = ctl.enter();
+            for (pos, &fid) in cands.iter().enumerate().skip(first) {
+                ctl.at(pos);
                 let fa = self.s.fact_args(fid);
                 let mut nb = 0;
                 let mut ok = true;
@@ -229,16 +345,18 @@ impl Eval<'_> {
                         }
                     }
                 }
-                if ok && self.solve_rec(lits, b, need, done, cb) {
+                if ok && self.solve_rec(lits, b, need, done, ctl, cb) {
                     stop = true;
                 }
                 for &v in &bound[..nb] {
                     b[v as usize] = UNBOUND;
                 }
+                ctl.resuming = false;
                 if stop {
                     break;
                 }
             }
+            ctl.leave();
             done[i] = false;
             return stop;
         }
@@ -258,7 +376,7 @@ impl Eval<'_> {
                     return false;
                 }
                 b[slot as usize] = o;
-                let stop = self.solve_rec(lits, b, need, done, cb);
+                let stop = self.solve_rec(lits, b, need, done, ctl, cb);
                 b[slot as usize] = UNBOUND;
                 return stop;
             }
@@ -274,17 +392,28 @@ impl Eval<'_> {
             .find(|&v| b[v as usize] == UNBOUND);
         if let Some(v) = slot {
             let mut stop = false;
-            for &o in &self.c.type_objects[self.types[v as usize] as usize] {
+            let first = ctl.enter();
+            let objects = &self.c.type_objects[self.types[v as usize] as usize];
+            for (pos, &o) in objects.iter().enumerate().skip(first) {
+                ctl.at(pos);
                 b[v as usize] = o;
-                if self.solve_rec(lits, b, need, done, cb) {
+                let found = self.solve_rec(lits, b, need, done, ctl, cb);
+                ctl.resuming = false;
+                if found {
                     stop = true;
                     break;
                 }
             }
+            ctl.leave();
             b[v as usize] = UNBOUND;
             return stop;
         }
-        cb(b)
+        if ctl.resuming {
+            // The binding the enumeration resumes after: already given.
+            ctl.resuming = false;
+            return false;
+        }
+        cb(b, &ctl.path)
     }
 
     /// Collects the effects of an action (evaluated in the current state) into `out`.

@@ -25,7 +25,7 @@ use crate::plan::{Decomposition, GeoStep, Plan, PlanAction};
 use crate::state::{FxHasher, Interner, State, mix64};
 
 use super::compile::{CTerm, Compiled};
-use super::eval::{EffectBuf, Eval, UNBOUND};
+use super::eval::{Cursor, EffectBuf, Eval, UNBOUND};
 use super::{Limit, PlanError, PlannerOptions, SearchStats};
 
 mod bfs;
@@ -47,6 +47,15 @@ use relevance::{MaskTable, MayAchieve, WILD};
 use repair::{Mode, Repair};
 
 const NIL: u32 = u32::MAX;
+
+/// A method's bindings come in pieces, the binder resuming where the last piece stopped, so a
+/// search holds at most this many of one method at once, never the whole product of its
+/// precondition's joins.
+const MAX_CHUNK: usize = 4096;
+
+/// The first piece a depth-first frame takes (most tasks take their first binding, or one of
+/// the first few); each next piece is four times larger, up to [`MAX_CHUNK`].
+const FIRST_CHUNK: usize = 16;
 
 /// One cell of the persistent task-network stack.
 #[derive(Clone, Copy)]
@@ -124,10 +133,8 @@ pub(crate) struct Search<'a, 'o> {
     loop_check: bool,
     stats: SearchStats,
     start: Instant,
-    /// When the resident memory is read next (every `limits::MEMORY_CHECK_EVERY`).
-    next_memory_check: Instant,
-    /// A table's doubling would have passed the memory limit ([`Search::growth_fits`]).
-    memory_reached: bool,
+    /// The time and memory limits, polled at every node and inside precondition joins.
+    watch: limits::Watch,
     effects: EffectBuf,
     /// Normal search, or replaying a path for a repair (`repair.rs`).
     mode: Mode,
@@ -204,8 +211,7 @@ impl<'a, 'o> Search<'a, 'o> {
             geo_capped: false,
             loop_check: opts.loop_check,
             start: Instant::now(),
-            next_memory_check: Instant::now(),
-            memory_reached: false,
+            watch: limits::Watch::new(Instant::now(), opts.limits.time, opts.limits.memory_mb),
             effects: EffectBuf::default(),
             mode: Mode::Normal,
             forced: VecDeque::new(),
@@ -227,6 +233,7 @@ impl<'a, 'o> Search<'a, 'o> {
     /// when the search was made.
     pub fn started_at(mut self, t: Instant) -> Self {
         self.start = t;
+        self.watch.restart_at(t);
         self
     }
 
@@ -304,36 +311,27 @@ impl<'a, 'o> Search<'a, 'o> {
 
     /// The first `max` bindings of method `m`'s parameters for ground task `task`, flat.
     fn bindings_upto(&self, m: u32, task: u32, max: usize) -> (Vec<u32>, usize) {
+        let (flat, count, _) = self.bindings_after(m, task, None, max);
+        (flat, count)
+    }
+
+    /// At most `max` bindings of method `m`'s parameters for ground task `task`, flat, after
+    /// the one of cursor `after` (from the first when `None`), and the cursor to go on from
+    /// when more may follow. The join polls the limits: once one is reached it gives what it
+    /// has and no cursor (the search then stops at that limit, it does not conclude).
+    fn bindings_after(
+        &self,
+        m: u32,
+        task: u32,
+        after: Option<&Cursor>,
+        max: usize,
+    ) -> (Vec<u32>, usize, Option<Cursor>) {
         let c = self.c;
         let method = &c.methods[m as usize];
         let mut b = vec![UNBOUND; method.slot_types.len()];
-        if task != NIL {
-            let args = &self.gtasks.key(task)[1..];
-            if args.len() != method.task_args.len() {
-                return (Vec::new(), 0);
-            }
-            for (t, &a) in method.task_args.iter().zip(args) {
-                match *t {
-                    CTerm::Obj(o) => {
-                        if o != a {
-                            return (Vec::new(), 0);
-                        }
-                    }
-                    CTerm::Var(v) => {
-                        let cur = b[v as usize];
-                        if cur == UNBOUND {
-                            if !c.is_of(a, method.slot_types[v as usize]) {
-                                return (Vec::new(), 0);
-                            }
-                            b[v as usize] = a;
-                        } else if cur != a {
-                            return (Vec::new(), 0);
-                        }
-                    }
-                }
-            }
+        if task != NIL && !self.bind_task_args(m, task, &mut b) {
+            return (Vec::new(), 0, None);
         }
-        let need = &method.params;
         let n = method.n_params;
         let mut out = Vec::new();
         let mut count = 0;
@@ -342,12 +340,48 @@ impl<'a, 'o> Search<'a, 'o> {
             s: &self.state,
             types: &method.slot_types,
         };
-        ev.solve(&method.pre, &mut b, need, &mut |bb| {
-            out.extend_from_slice(&bb[..n]);
-            count += 1;
-            count >= max
-        });
-        (out, count)
+        let poll = || self.watch.poll().is_some();
+        let (_, more) = ev.solve_from(
+            &method.pre,
+            &mut b,
+            &method.params,
+            after,
+            &poll,
+            &mut |bb| {
+                out.extend_from_slice(&bb[..n]);
+                count += 1;
+                count >= max
+            },
+        );
+        (out, count, more)
+    }
+
+    /// Binds method `m`'s task parameters to the arguments of ground task `task` in `b`;
+    /// `false` when they do not fit (a constant, a type, a repeated parameter).
+    fn bind_task_args(&self, m: u32, task: u32, b: &mut [u32]) -> bool {
+        let method = &self.c.methods[m as usize];
+        let args = &self.gtasks.key(task)[1..];
+        if args.len() != method.task_args.len() {
+            return false;
+        }
+        for (t, &a) in method.task_args.iter().zip(args) {
+            match *t {
+                CTerm::Obj(o) if o != a => return false,
+                CTerm::Obj(_) => {}
+                CTerm::Var(v) => {
+                    let cur = b[v as usize];
+                    if cur == UNBOUND {
+                        if !self.c.is_of(a, method.slot_types[v as usize]) {
+                            return false;
+                        }
+                        b[v as usize] = a;
+                    } else if cur != a {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// The slots of action `a` bound to the arguments of ground task `task`, if their types fit.

@@ -24,7 +24,9 @@ use super::super::compile::{CTerm, Compiled};
 use super::super::eval::{Eval, UNBOUND};
 use super::super::{Limit, current_rss_kb};
 use super::heuristic::{Caps, MAX_ACTIONS, MAX_METHODS, Rc};
-use super::{Cell, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth};
+use super::{
+    Cell, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth,
+};
 
 /// An unreachable cost.
 pub(super) const INF: u32 = u32::MAX / 4;
@@ -440,6 +442,9 @@ impl<'a, 'o> Search<'a, 'o> {
         let (bindings, count) = self.bindings(root, NIL);
         let stride = c.methods[root as usize].n_params;
         for i in 0..count {
+            if self.watch.poll().is_some() {
+                return;
+            }
             let binding = bindings[i * stride..(i + 1) * stride].to_vec();
             let subs = &c.methods[root as usize].subtasks;
             let n = subs.len() as u32;
@@ -543,28 +548,59 @@ impl<'a, 'o> Search<'a, 'o> {
         } else {
             f.cell_cost[cell.next as usize]
         };
-        let mut choices: Vec<(u32, Vec<u32>)> = Vec::new();
         for &m in self.methods_of(cell.task) {
-            let (bindings, count) = self.bindings(m, cell.task);
             let stride = c.methods[m as usize].n_params;
-            for i in 0..count {
-                choices.push((m, bindings[i * stride..(i + 1) * stride].to_vec()));
+            let mut after = None;
+            loop {
+                // The bindings in pieces: memory for one piece, not the whole join.
+                let (bindings, count, more) =
+                    self.bindings_after(m, cell.task, after.as_ref(), MAX_CHUNK);
+                for i in 0..count {
+                    if self.watch.poll().is_some() {
+                        // A node of many successors: the limit stops it midway (the caller
+                        // sees the limit at its next node).
+                        return;
+                    }
+                    let binding = &bindings[i * stride..(i + 1) * stride];
+                    let at = (sid, next_occ, g, rest_cost);
+                    self.bfs_push_decomposition(f, ni, cell, m, binding, at);
+                }
+                match more {
+                    Some(cursor) => after = Some(cursor),
+                    None => break,
+                }
             }
         }
-        for (m, binding) in choices {
+    }
+
+    /// The successor of node `ni` that decomposes its first task `cell` by method `m` under
+    /// `binding`, pushed unless it is a dead end or seen; `at` is the node's state, next
+    /// occurrence, cost so far and the rest of its network's cost.
+    fn bfs_push_decomposition(
+        &mut self,
+        f: &mut Frontier,
+        ni: u32,
+        cell: Cell,
+        m: u32,
+        binding: &[u32],
+        at: (u32, u32, u32, u32),
+    ) {
+        let (sid, next_occ, g, rest_cost) = at;
+        let c = self.c;
+        {
             let subs = &c.methods[m as usize].subtasks;
             let n = subs.len() as u32;
-            let (top, h) = self.push_network(subs, &binding, next_occ, cell.next, rest_cost, f);
+            let (top, h) = self.push_network(subs, binding, next_occ, cell.next, rest_cost, f);
             if h >= INF {
-                continue;
+                return;
             }
             if !f.seen.insert((sid, self.network_hash(top))) {
                 self.stats.revisits_pruned += 1;
-                continue;
+                return;
             }
             let h = self.net_estimate(top, sid, &mut f.hr, &f.cell_cost);
             if h >= INF {
-                continue;
+                return;
             }
             let node = Node {
                 parent: ni,

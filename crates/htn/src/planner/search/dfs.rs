@@ -6,7 +6,7 @@
 use super::super::{PlanError, Strategy};
 use super::frames::{Choice, HtnFrame, HtnId, Key};
 use super::repair::Mode;
-use super::{Cell, NIL, Search, Step, Stop, TreeRec, set_growth};
+use super::{Cell, FIRST_CHUNK, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, set_growth};
 use crate::planner::compile::CTerm;
 use crate::planner::eval::Eval;
 
@@ -171,11 +171,17 @@ impl<'a, 'o> Search<'a, 'o> {
             let Some(pos) = methods.iter().position(|&m| m == method) else {
                 return Ok(false);
             };
-            let (bindings, count) = self.bindings(method, task);
             let stride = self.c.methods[method as usize].n_params;
-            let Some(idx) = (0..count).find(|&i| bindings[i * stride..(i + 1) * stride] == binding)
-            else {
-                return Ok(false);
+            let mut after = None;
+            let (bindings, count, more, idx) = loop {
+                let (bindings, count, more) =
+                    self.bindings_after(method, task, after.as_ref(), MAX_CHUNK);
+                let found = (0..count).find(|&i| bindings[i * stride..(i + 1) * stride] == binding);
+                match (found, more) {
+                    (Some(idx), more) => break (bindings, count, more, idx),
+                    (None, Some(cursor)) => after = Some(cursor),
+                    (None, None) => return Ok(false),
+                }
             };
             let f = &mut self.htn_frames[h];
             f.mpos = pos + 1;
@@ -183,6 +189,7 @@ impl<'a, 'o> Search<'a, 'o> {
             f.stride = stride;
             f.bindings = bindings;
             f.count = count;
+            f.more = more;
             f.next = idx + 1;
             f.tried = 1;
             self.apply_method(h, method, &binding);
@@ -255,19 +262,32 @@ impl<'a, 'o> Search<'a, 'o> {
                 self.apply_method(h, m, &binding);
                 return true;
             }
+            if let Some(after) = f.more.take() {
+                // The current method's next piece of bindings, larger each time.
+                let (m, task, max) = (
+                    f.method,
+                    f.task,
+                    (f.count * 4).clamp(FIRST_CHUNK, MAX_CHUNK),
+                );
+                let (bindings, count, more) = self.bindings_after(m, task, Some(&after), max);
+                let f = &mut self.htn_frames[h];
+                (f.bindings, f.count, f.more, f.next) = (bindings, count, more, 0);
+                continue;
+            }
             let (task, mpos) = (f.task, f.mpos);
             let methods = self.methods_of(task);
             if mpos >= methods.len() {
                 return false;
             }
             let m = methods[mpos];
-            let (bindings, count) = self.bindings(m, task);
+            let (bindings, count, more) = self.bindings_after(m, task, None, FIRST_CHUNK);
             let f = &mut self.htn_frames[h];
             f.mpos = mpos + 1;
             f.method = m;
             f.stride = self.c.methods[m as usize].n_params;
             f.bindings = bindings;
             f.count = count;
+            f.more = more;
             f.next = 0;
         }
     }

@@ -36,8 +36,9 @@ impl<'a, 'o> Search<'a, 'o> {
                             plan: self.build_plan(),
                         },
                         Stop::Limit(l) => Outcome::LimitReached { limit: l },
-                        // Every node reachable was generated (only sound pruning).
-                        Stop::Exhausted | Stop::Switch => Outcome::Unsolvable,
+                        // Every node reachable was generated (only sound pruning), unless a
+                        // join gave up at a limit.
+                        Stop::Exhausted | Stop::Switch => self.unsolvable_or_limit(),
                     };
                 }
                 Stop::Exhausted => {
@@ -54,7 +55,7 @@ impl<'a, 'o> Search<'a, 'o> {
                                 limit: Limit::GeometricAlternatives,
                             }
                         } else {
-                            Outcome::Unsolvable
+                            self.unsolvable_or_limit()
                         };
                     }
                     self.reset();
@@ -68,6 +69,17 @@ impl<'a, 'o> Search<'a, 'o> {
             outcome,
             stats: self.stats,
         })
+    }
+}
+
+impl Search<'_, '_> {
+    /// "No plan": only when no precondition join gave up at a limit on the way (a join cut
+    /// short leaves bindings untried).
+    fn unsolvable_or_limit(&self) -> Outcome {
+        match self.watch.reached() {
+            Some(limit) => Outcome::LimitReached { limit },
+            None => Outcome::Unsolvable,
+        }
     }
 }
 

@@ -8,6 +8,7 @@ use std::ops::{Index, IndexMut};
 
 use crate::oracle::{GeoSolution, StreamId};
 
+use super::super::eval::Cursor;
 use super::Search;
 
 /// Lengths of the arena, trail, plan and tree when a frame was pushed: undoing the frame's
@@ -40,8 +41,11 @@ pub(super) struct HtnFrame {
     pub(super) mpos: usize,
     pub(super) method: u32,
     pub(super) stride: usize,
+    /// The current piece of the current method's bindings (`count` of them, `stride` slots
+    /// each, flat), and where the binder goes on when more may follow.
     pub(super) bindings: Vec<u32>,
     pub(super) count: usize,
+    pub(super) more: Option<Cursor>,
     pub(super) next: usize,
     pub(super) tried: u32,
 }
@@ -60,6 +64,7 @@ impl HtnFrame {
             stride: 0,
             bindings: Vec::new(),
             count: 0,
+            more: None,
             next: 0,
             tried: 0,
         }
