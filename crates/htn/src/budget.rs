@@ -5,58 +5,101 @@
 //! that the binary ends with exit 2 (a limit), not 3 (bad input). Without a budget (library
 //! use, tests) every check passes.
 
+use std::cell::Cell;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use crate::planner::{Limit, current_rss_kb};
 
 /// How often the resident memory is read (a read of /proc costs microseconds).
-const MEMORY_CHECK_EVERY: Duration = Duration::from_millis(10);
+const MEMORY_CHECK_EVERY: Duration = Duration::from_millis(2);
 
-/// A deadline and a cap on resident memory, checked on demand.
-#[derive(Clone, Copy, Debug)]
+/// A watch stops this far below its memory cap (a 32nd of it, 4 MiB to 256 MiB): what may be
+/// allocated between two reads, and what printing the result needs after the stop.
+fn headroom_kb(cap_kb: u64) -> u64 {
+    (cap_kb / 32).clamp(4 << 10, 256 << 10)
+}
+
+/// A deadline and a cap on resident memory, checked on demand through a shared reference (so
+/// that loops holding other state borrowed, such as a precondition's join, can check it). A
+/// limit once passed stays passed.
+#[derive(Clone, Debug)]
 pub struct Watch {
     deadline: Option<Instant>,
-    memory_kb: Option<u64>,
-    next_memory_check: Instant,
+    /// The cap as given.
+    cap_kb: Option<u64>,
+    /// Where checks stop: the cap less its headroom.
+    stop_kb: Option<u64>,
+    next_memory_check: Cell<Instant>,
+    peak_kb: Cell<u64>,
+    passed: Cell<Option<Limit>>,
 }
 
 impl Watch {
-    /// A watch that ends at `deadline` or when the process holds more than `memory_mb` MiB.
+    /// A watch that ends at `deadline` or when the process holds more than `memory_mb` MiB
+    /// (less a headroom).
     pub fn new(deadline: Option<Instant>, memory_mb: Option<u64>) -> Watch {
+        let cap_kb = memory_mb.map(|m| m.saturating_mul(1024));
         Watch {
             deadline,
-            memory_kb: memory_mb.map(|m| m.saturating_mul(1024)),
-            next_memory_check: Instant::now(),
+            cap_kb,
+            stop_kb: cap_kb.map(|kb| kb.saturating_sub(headroom_kb(kb))),
+            next_memory_check: Cell::new(Instant::now()),
+            peak_kb: Cell::new(0),
+            passed: Cell::new(None),
         }
     }
 
-    /// The limit passed, if one is: the clock every call, the memory every 10 ms.
-    pub fn check(&mut self) -> Option<Limit> {
+    /// Moves the deadline.
+    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
+    }
+
+    /// The limit passed, if one is: the clock every call (tens of nanoseconds), the memory
+    /// every 2 ms.
+    pub fn check(&self) -> Option<Limit> {
+        if let Some(l) = self.passed.get() {
+            return Some(l);
+        }
         let now = Instant::now();
         if self.deadline.is_some_and(|d| now >= d) {
-            return Some(Limit::Time);
-        }
-        if let Some(kb) = self.memory_kb
-            && now >= self.next_memory_check
-        {
-            self.next_memory_check = now + MEMORY_CHECK_EVERY;
-            if current_rss_kb() > kb {
-                return Some(Limit::Memory);
+            self.passed.set(Some(Limit::Time));
+        } else if now >= self.next_memory_check.get() {
+            self.next_memory_check.set(now + MEMORY_CHECK_EVERY);
+            let rss = current_rss_kb();
+            self.peak_kb.set(self.peak_kb.get().max(rss));
+            if self.stop_kb.is_some_and(|kb| rss > kb) {
+                self.passed.set(Some(Limit::Memory));
             }
         }
-        None
+        self.passed.get()
     }
 
-    /// Whether `bytes` more would still fit under the memory cap (false: the cap is passed).
+    /// The limit passed so far, without reading the clock.
+    pub fn passed(&self) -> Option<Limit> {
+        self.passed.get()
+    }
+
+    /// The highest resident memory a check read, in KiB.
+    pub fn peak_kb(&self) -> u64 {
+        self.peak_kb.get()
+    }
+
+    /// Whether `bytes` more would still fit under the memory cap (less its headroom); if not,
+    /// the memory limit is passed.
     pub fn fits(&self, bytes: u64) -> bool {
-        self.memory_kb
-            .is_none_or(|kb| current_rss_kb().saturating_add(bytes >> 10) <= kb)
+        let fits = self
+            .stop_kb
+            .is_none_or(|kb| current_rss_kb().saturating_add(bytes >> 10) <= kb);
+        if !fits {
+            self.passed.set(Some(Limit::Memory));
+        }
+        fits
     }
 
     /// The memory cap in MiB, if any.
     pub fn memory_mb(&self) -> Option<u64> {
-        self.memory_kb.map(|kb| kb >> 10)
+        self.cap_kb.map(|kb| kb >> 10)
     }
 }
 
@@ -134,16 +177,26 @@ mod tests {
 
     #[test]
     fn a_watch_stops_at_its_deadline_and_memory() {
-        let mut w = Watch::new(Some(Instant::now()), None);
+        let w = Watch::new(Some(Instant::now()), None);
         assert_eq!(w.check(), Some(Limit::Time));
-        let mut w = Watch::new(None, Some(1));
+        let w = Watch::new(None, Some(1));
         assert_eq!(
             w.check(),
             Some(Limit::Memory),
             "a test process holds over 1 MiB"
         );
-        let mut w = Watch::new(None, None);
+        let w = Watch::new(None, None);
         assert_eq!(w.check(), None);
         assert!(w.fits(u64::MAX));
+    }
+
+    #[test]
+    fn a_limit_passed_stays_passed_and_stops_below_the_cap() {
+        let w = Watch::new(None, Some(1 << 20));
+        assert_eq!(w.check(), None);
+        // 1 TiB cap: the headroom is its largest, 256 MiB.
+        assert!(!w.fits((1 << 40) - (200 << 20)));
+        assert_eq!(w.passed(), Some(Limit::Memory));
+        assert_eq!(w.check(), Some(Limit::Memory));
     }
 }

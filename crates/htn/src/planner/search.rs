@@ -20,6 +20,7 @@ use std::collections::{HashSet, VecDeque};
 use std::hash::BuildHasherDefault;
 use std::time::Instant;
 
+use crate::budget::Watch;
 use crate::oracle::{GeometricOracle, OracleError};
 use crate::plan::{Decomposition, GeoStep, Plan, PlanAction};
 use crate::state::{FxHasher, Interner, State, mix64};
@@ -134,7 +135,7 @@ pub(crate) struct Search<'a, 'o> {
     stats: SearchStats,
     start: Instant,
     /// The time and memory limits, polled at every node and inside precondition joins.
-    watch: limits::Watch,
+    watch: Watch,
     effects: EffectBuf,
     /// Normal search, or replaying a path for a repair (`repair.rs`).
     mode: Mode,
@@ -211,7 +212,10 @@ impl<'a, 'o> Search<'a, 'o> {
             geo_capped: false,
             loop_check: opts.loop_check,
             start: Instant::now(),
-            watch: limits::Watch::new(Instant::now(), opts.limits.time, opts.limits.memory_mb),
+            watch: Watch::new(
+                opts.limits.time.and_then(|t| Instant::now().checked_add(t)),
+                opts.limits.memory_mb,
+            ),
             effects: EffectBuf::default(),
             mode: Mode::Normal,
             forced: VecDeque::new(),
@@ -233,7 +237,8 @@ impl<'a, 'o> Search<'a, 'o> {
     /// when the search was made.
     pub fn started_at(mut self, t: Instant) -> Self {
         self.start = t;
-        self.watch.restart_at(t);
+        self.watch
+            .set_deadline(self.opts.limits.time.and_then(|l| t.checked_add(l)));
         self
     }
 
@@ -340,7 +345,7 @@ impl<'a, 'o> Search<'a, 'o> {
             s: &self.state,
             types: &method.slot_types,
         };
-        let poll = || self.watch.poll().is_some();
+        let poll = || self.watch.check().is_some();
         let (_, more) = ev.solve_from(
             &method.pre,
             &mut b,

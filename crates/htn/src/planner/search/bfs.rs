@@ -24,6 +24,7 @@ use super::super::compile::{CTerm, Compiled};
 use super::super::eval::{Eval, UNBOUND};
 use super::super::{Limit, current_rss_kb};
 use super::heuristic::{Caps, MAX_ACTIONS, MAX_METHODS, Rc};
+use super::limits::drop_in_background;
 use super::{
     Cell, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth,
 };
@@ -369,11 +370,18 @@ impl<'a, 'o> Search<'a, 'o> {
         self.reset();
         self.load(init);
         let mut f = self.new_frontier(rc, until);
-        self.seed_roots(&mut f);
+        let stop = self.best_first_over(&mut f);
+        drop_in_background(f);
+        stop
+    }
+
+    /// The search of [`Search::best_first_with`] over the open list `f`.
+    fn best_first_over(&mut self, f: &mut Frontier) -> Stop {
+        self.seed_roots(f);
         while let Some(Reverse((_, _, ni))) = f.open.pop() {
             self.stats.nodes += 1;
             self.stats.best_first_nodes += 1;
-            if let Some(stop) = self.bfs_limit(&mut f) {
+            if let Some(stop) = self.bfs_limit(f) {
                 return stop;
             }
             let node = &f.nodes[ni as usize];
@@ -397,8 +405,8 @@ impl<'a, 'o> Search<'a, 'o> {
             }
             let task = self.gtasks.key(cell.task)[0];
             match self.c.tasks[task as usize].action {
-                Some(a) => self.bfs_apply_action(&mut f, ni, cell, a),
-                None => self.bfs_decompose(&mut f, ni, cell),
+                Some(a) => self.bfs_apply_action(f, ni, cell, a),
+                None => self.bfs_decompose(f, ni, cell),
             }
         }
         Stop::Exhausted
@@ -442,7 +450,7 @@ impl<'a, 'o> Search<'a, 'o> {
         let (bindings, count) = self.bindings(root, NIL);
         let stride = c.methods[root as usize].n_params;
         for i in 0..count {
-            if self.watch.poll().is_some() {
+            if self.watch.check().is_some() {
                 return;
             }
             let binding = bindings[i * stride..(i + 1) * stride].to_vec();
@@ -556,7 +564,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 let (bindings, count, more) =
                     self.bindings_after(m, cell.task, after.as_ref(), MAX_CHUNK);
                 for i in 0..count {
-                    if self.watch.poll().is_some() {
+                    if self.watch.check().is_some() {
                         // A node of many successors: the limit stops it midway (the caller
                         // sees the limit at its next node).
                         return;

@@ -4,6 +4,7 @@
 
 use super::super::compile::Compiled;
 use super::super::{Limit, Outcome, PlanError, PlannerOptions, SearchResult, current_rss_kb};
+use super::limits::drop_in_background;
 use super::{Search, Stop};
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -64,6 +65,15 @@ impl<'a, 'o> Search<'a, 'o> {
             }
         };
         self.stats.time_s = self.start.elapsed().as_secs_f64();
+        // The tables that grew with the search, freed off the caller's time.
+        drop_in_background((
+            std::mem::take(&mut self.gtasks),
+            std::mem::take(&mut self.arena),
+            std::mem::take(&mut self.tree),
+            std::mem::take(&mut self.visited),
+            std::mem::take(&mut self.may_memo),
+            std::mem::take(&mut self.htn_frames),
+        ));
         self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
         Ok(SearchResult {
             outcome,
@@ -76,7 +86,7 @@ impl Search<'_, '_> {
     /// "No plan": only when no precondition join gave up at a limit on the way (a join cut
     /// short leaves bindings untried).
     fn unsolvable_or_limit(&self) -> Outcome {
-        match self.watch.reached() {
+        match self.watch.passed() {
             Some(limit) => Outcome::LimitReached { limit },
             None => Outcome::Unsolvable,
         }

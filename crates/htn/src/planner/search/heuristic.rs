@@ -33,7 +33,7 @@ use crate::state::{FxHasher, State};
 
 use super::super::compile::{CEffect, CFormula, CLit, CTerm, Compiled};
 use super::super::current_rss_kb;
-use super::super::eval::{Eval, UNBOUND};
+use super::super::eval::{Enumerated, Eval, UNBOUND};
 use super::bfs::INF;
 
 /// The most ground actions the grounding makes before it gives up.
@@ -57,6 +57,15 @@ pub(super) struct Caps {
     pub methods: usize,
     pub deadline: Option<Instant>,
     pub memory_kb: Option<u64>,
+}
+
+impl Caps {
+    /// Whether the deadline has passed or the resident memory is over its cap (a join's poll,
+    /// every few thousand steps: reading the memory costs a few microseconds).
+    fn spent(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+            || self.memory_kb.is_some_and(|kb| current_rss_kb() > kb)
+    }
 }
 
 /// The ground relaxed model and the scratch space of its h_add evaluation.
@@ -311,7 +320,8 @@ impl Grounder<'_> {
             };
             let caps = self.caps;
             let mut count = 0u32;
-            ev.solve(lits, &mut b, need, &mut |b| {
+            let poll = || caps.spent();
+            let (how, _) = ev.solve_from(lits, &mut b, need, None, &poll, &mut |b| {
                 found.push(b.to_vec());
                 count = count.wrapping_add(1);
                 if found.len() > caps.methods {
@@ -322,6 +332,7 @@ impl Grounder<'_> {
                 }
                 stop
             });
+            stop |= how == Enumerated::Aborted;
         }
         if stop {
             self.over = true;

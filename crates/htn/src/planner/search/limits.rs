@@ -1,21 +1,10 @@
 //! The search's limits: time, nodes, and the resident memory, with the growth of its tables
 //! counted before they double.
 
-use std::cell::Cell;
 use std::collections::HashSet;
-use std::time::Instant;
 
-use super::super::{Limit, current_rss_kb};
+use super::super::Limit;
 use super::Search;
-
-/// How often the search reads its resident memory (a read of /proc costs microseconds).
-pub(super) const MEMORY_CHECK_EVERY: std::time::Duration = std::time::Duration::from_millis(2);
-
-/// The search stops this far below the memory limit (a 32nd of it, 4 MiB to 256 MiB): what it
-/// may allocate between two reads, and what printing the result needs after the stop.
-fn headroom_kb(limit_kb: u64) -> u64 {
-    (limit_kb / 32).clamp(4 << 10, 256 << 10)
-}
 
 /// Whether a table of `len` entries with room for `capacity` may double before the next
 /// check: one node's expansion inserts many entries (every method and binding, the heuristic's
@@ -50,105 +39,18 @@ pub(super) fn table_growth<T>(len: usize, capacity: usize) -> usize {
     }
 }
 
-/// The time and memory limits, read through a shared reference, so that loops that hold the
-/// search's state borrowed (a precondition's join, the grounding of its heuristic) can poll
-/// them too. A limit once reached stays reached.
-#[derive(Debug)]
-pub(super) struct Watch {
-    start: Instant,
-    time: Option<std::time::Duration>,
-    /// The resident memory at which to stop: the limit less its headroom.
-    memory_kb: Option<u64>,
-    next_memory_check: Cell<Instant>,
-    peak_kb: Cell<u64>,
-    hit: Cell<Option<Limit>>,
-}
-
-impl Watch {
-    pub(super) fn new(
-        start: Instant,
-        time: Option<std::time::Duration>,
-        memory_mb: Option<u64>,
-    ) -> Watch {
-        Watch {
-            start,
-            time,
-            memory_kb: memory_mb.map(|mb| {
-                let kb = mb.saturating_mul(1024);
-                kb.saturating_sub(headroom_kb(kb))
-            }),
-            next_memory_check: Cell::new(start),
-            peak_kb: Cell::new(0),
-            hit: Cell::new(None),
-        }
-    }
-
-    /// The limit reached, if any: the clock at every call (tens of nanoseconds), the resident
-    /// memory every [`MEMORY_CHECK_EVERY`] (a read of /proc costs microseconds).
-    pub(super) fn poll(&self) -> Option<Limit> {
-        if let Some(l) = self.hit.get() {
-            return Some(l);
-        }
-        let now = Instant::now();
-        if let Some(t) = self.time
-            && now.duration_since(self.start) >= t
-        {
-            self.hit.set(Some(Limit::Time));
-        } else if now >= self.next_memory_check.get() {
-            self.next_memory_check.set(now + MEMORY_CHECK_EVERY);
-            let rss = current_rss_kb();
-            self.peak_kb.set(self.peak_kb.get().max(rss));
-            if self.memory_kb.is_some_and(|kb| rss > kb) {
-                self.hit.set(Some(Limit::Memory));
-            }
-        }
-        self.hit.get()
-    }
-
-    /// The limit reached so far, without reading the clock.
-    pub(super) fn reached(&self) -> Option<Limit> {
-        self.hit.get()
-    }
-
-    /// The highest resident memory read so far, in KiB.
-    pub(super) fn peak_kb(&self) -> u64 {
-        self.peak_kb.get()
-    }
-
-    /// Counts the time limit from `t`.
-    pub(super) fn restart_at(&mut self, t: Instant) {
-        self.start = t;
-    }
-
-    /// Whether growing by `extra` bytes (while a table doubles, the old and the new one are
-    /// both resident) stays within the memory limit; if not, the limit is reached.
-    fn growth_fits(&self, extra: usize) -> bool {
-        let Some(kb) = self.memory_kb else {
-            return true;
-        };
-        if extra == 0 {
-            return true;
-        }
-        let fits = current_rss_kb() + (extra as u64 >> 10) <= kb;
-        if !fits {
-            self.hit.set(Some(Limit::Memory));
-        }
-        fits
-    }
-}
-
 impl<'a, 'o> Search<'a, 'o> {
     /// The limits, checked at every node: the clock is cheap (far below a node's cost), so a
     /// limit stops the search within one node of it, however costly nodes are (best-first
     /// nodes, geometric calls); inside a node, the precondition joins poll the same
-    /// [`Watch`].
+    /// [`Watch`](crate::budget::Watch).
     pub(super) fn check_limits(&mut self) -> Option<Limit> {
         if let Some(n) = self.opts.limits.nodes
             && self.stats.nodes >= n
         {
             return Some(Limit::Nodes);
         }
-        let hit = self.watch.poll();
+        let hit = self.watch.check();
         self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(self.watch.peak_kb());
         hit
     }
@@ -157,6 +59,15 @@ impl<'a, 'o> Search<'a, 'o> {
     /// the memory limit is marked reached, for [`Search::check_limits`]. `extra` 0 (nothing
     /// doubles) costs nothing.
     pub(super) fn growth_fits(&mut self, extra: usize) -> bool {
-        self.watch.growth_fits(extra)
+        extra == 0 || self.watch.fits(extra as u64)
     }
+}
+
+/// Frees `tables` on a thread of its own: a search's millions of small allocations take
+/// tenths of a second to free, which would come after its time limit; the binary exits
+/// without waiting for them. Freed in place if no thread can be started.
+pub(super) fn drop_in_background<T: Send + 'static>(tables: T) {
+    let _ = std::thread::Builder::new()
+        .name("htn-free".into())
+        .spawn(move || drop(tables));
 }
