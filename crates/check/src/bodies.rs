@@ -222,8 +222,8 @@ mod tests {
         Placed::new(owner, &part, &frame)
     }
 
-    /// Bench run 59 (`bench library --runs 100 --seed 1`), step 9, transfer, frame 37+0.60: the
-    /// left gripper's finger 2.9 mm from the white book. parry's `contact` says 1.5 mm deep.
+    /// A gripper finger 2.9 mm from a book, poses as a planned transfer has them: parry's
+    /// `contact` reports 1.5 mm of depth here, so the exact intersection test must decide.
     #[test]
     fn boxes_apart_have_no_depth_though_contact_says_otherwise() {
         let finger = placed(

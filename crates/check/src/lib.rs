@@ -4,8 +4,45 @@
 //! link poses per frame, `holding` / `held_pose`, the timed `joint_trajectory` with its declared
 //! limits, `object_poses` after each step, the literals a step adds and deletes) and parry3d's
 //! queries; never the planner's state or its collision code, so that a plan it passes is
-//! collision-free by a second opinion. The rules are in
-//! `docs/check.md`.
+//! collision-free by a second opinion. The rules are in `docs/check.md`; `htngtp check
+//! PLAN.json` is this crate's command line. [`check_file`] reads and checks a file,
+//! [`parse_plan`] and [`check_plan`] do the two halves, and the [`Report`] lists each
+//! [`Fault`] with its step, trajectory, frame and the bodies involved.
+//!
+//! # Example
+//!
+//! A one-step plan that puts a book down 1 cm inside the desk: the check reports the
+//! penetration, and with the book resting on the desk's top the plan is clean.
+//!
+//! ```
+//! use check::{FaultKind, Options, check_plan, parse_plan};
+//!
+//! let plan_with_book_at = |z: f32| {
+//!     format!(
+//!         r#"{{"format": "htngtp-plan", "version": 1, "domain": "d", "problem": "p",
+//!            "status": "solved",
+//!            "scene": {{"agents": [], "objects": [
+//!              {{"name": "desk", "movable": false, "pose": {{"t": [1, 0, 0.375], "q": [0, 0, 0, 1]}},
+//!                "shape": {{"box": {{"half_extents": [0.5, 0.5, 0.375]}}}}}},
+//!              {{"name": "book", "movable": true, "pose": {{"t": [1, 0, 0.7702], "q": [0, 0, 0, 1]}},
+//!                "shape": {{"box": {{"half_extents": [0.1, 0.14, 0.02]}}}}}}]}},
+//!            "tree": [{{"id": 0, "action": "put", "args": ["book"], "step": 0}}], "root": [0],
+//!            "steps": [{{"index": 0, "id": 0, "action": "put", "args": ["book"],
+//!              "added": [], "deleted": [], "gtp": null,
+//!              "object_poses": {{"book": {{"t": [1, 0.2, {z}], "q": [0, 0, 0, 1]}}}}}}]}}"#
+//!     )
+//! };
+//!
+//! let sunk = parse_plan(&plan_with_book_at(0.76), "sunk.json")?;
+//! let report = check_plan(&sunk, &Options::default());
+//! assert_eq!(report.faults.len(), 1);
+//! assert_eq!(report.faults[0].kind, FaultKind::Penetration);
+//! println!("{}", report.faults[0]);
+//!
+//! let resting = parse_plan(&plan_with_book_at(0.7702), "resting.json")?;
+//! assert!(check_plan(&resting, &Options::default()).faults.is_empty());
+//! # Ok::<(), check::InputError>(())
+//! ```
 
 mod bodies;
 pub mod error;

@@ -1,4 +1,4 @@
-//! The second domain (`domains/office`, issue 15 point 3) as the user runs it: every problem,
+//! The second domain (`domains/office`) as the user runs it: every problem,
 //! with the three strategies, is planned by the binary in its scene, and the plan JSON it writes
 //! is re-checked by `htngtp check` (collisions, floating or sunken objects, stale literals).
 //! Beyond "solved and clean", each problem's point is asserted on the plan itself: the folder

@@ -1,4 +1,4 @@
-//! Issue 13 through the built binary: bad limits, full disks, closed pipes, devices as input,
+//! Hostile input through the built binary: bad limits, full disks, closed pipes, devices as input,
 //! far-away scene coordinates. Each test asserts the exit code and what the message says.
 
 use std::path::{Path, PathBuf};
@@ -473,7 +473,7 @@ fn tiny_domain_edited(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
     path
 }
 
-/// Issue 13, point 6: what HDDL does not allow is refused through the binary (exit 3), each
+/// What HDDL does not allow is refused through the binary (exit 3), each
 /// with FILE:LINE:COL and a message that says what is wrong.
 #[test]
 fn hddl_the_language_does_not_allow_is_refused_with_its_place() {

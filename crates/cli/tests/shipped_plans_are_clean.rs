@@ -2,9 +2,9 @@
 //! with the three strategies, is planned by the binary, and the plan JSON it writes is
 //! re-checked by `htngtp check` (which reads only the JSON, never the planner's state). Any
 //! collision, floating or sunken object or stale literal fails the test, with the checker's
-//! report. Before the fixes of issue 11 most of these plans collided (fingers through the desk
-//! on returns, held books through books, arms through the shelf on drives, the member's hand
-//! through the desk and the taken book inside their thighs).
+//! report: the faults a planner's own collision checks can miss are fingers through the desk on
+//! returns, held books through books, arms through the shelf on drives, the member's hand
+//! through the desk and a taken book inside their thighs.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -70,8 +70,8 @@ fn faults(json: &Path) -> Option<String> {
     (check.status.code() != Some(0)).then(|| String::from_utf8_lossy(&check.stdout).into_owned())
 }
 
-/// The trajectories of a plan JSON without a timed `joint_trajectory` (issue 16: every GS
-/// trajectory has one, with at least one point) or holding an object without its pose in some
+/// The trajectories of a plan JSON without a timed `joint_trajectory` (every GS trajectory must
+/// have one, with at least one point) or holding an object without its pose in some
 /// frame, as `step S trajectory K ...`.
 fn untimed(json: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(json).expect("plan JSON");
@@ -128,9 +128,9 @@ fn every_shipped_plan_passes_the_independent_check() {
     assert!(faulty.is_empty(), "{}", faulty.join("\n"));
 }
 
-/// The runs in which issue 11 found each kind of fault, on the code before its fixes: (domain,
-/// problem, strategy, seed, the fault found then). Each plan must now be clean.
-const ISSUE_11_FAULTS: [(&str, usize, &str, u32, &str); 6] = [
+/// Runs that exercise each kind of fault the check knows (an earlier planner had each of them
+/// there): (domain, problem, strategy, seed, the fault). Each plan must be clean.
+const FAULT_PRONE_RUNS: [(&str, usize, &str, u32, &str); 6] = [
     (
         "domain",
         3,
@@ -176,15 +176,15 @@ const ISSUE_11_FAULTS: [(&str, usize, &str, u32, &str); 6] = [
 ];
 
 #[test]
-fn the_runs_where_issue_11_found_faults_are_clean() {
-    let dir = scratch("issue11");
+fn the_fault_prone_runs_are_clean() {
+    let dir = scratch("fault-prone");
     let mut faulty = Vec::new();
-    for (domain, problem, strategy, seed, fault) in ISSUE_11_FAULTS {
+    for (domain, problem, strategy, seed, fault) in FAULT_PRONE_RUNS {
         let json = plan(&dir, domain, PROBLEMS[problem], strategy, seed);
         let json = json.unwrap_or_else(|| panic!("{domain} {problem} {strategy} {seed}: no plan"));
         if let Some(report) = faults(&json) {
             faulty.push(format!(
-                "{domain} {problem} {strategy} {seed} (was: {fault}):\n{report}"
+                "{domain} {problem} {strategy} {seed} (prone to: {fault}):\n{report}"
             ));
         }
     }
@@ -192,8 +192,8 @@ fn the_runs_where_issue_11_found_faults_are_clean() {
     assert!(faulty.is_empty(), "{}", faulty.join("\n"));
 }
 
-/// The demo's plan, as `htngtp demo` writes it (issue 11 found a finger through the desk on
-/// its third step's return).
+/// The demo's plan, as `htngtp demo` writes it (its third step's return passes close to the
+/// desk).
 #[test]
 fn the_demo_plan_passes_the_independent_check() {
     let dir = scratch("demo");

@@ -34,8 +34,8 @@ pub const WORLD_EXTENT_M: f32 = 1000.0;
 /// ([`SCENE_MEMORY_PER_BYTE`]), so 4 MiB stays near 300 MB.
 pub const MAX_SCENE_BYTES: u64 = 4 << 20;
 
-/// About how many bytes of memory reading a scene takes per byte of its file (measured: 60-65
-/// for scenes of 20,000 and 60,000 small objects).
+/// About how many bytes of memory reading a scene takes per byte of its file (60-65 for scenes
+/// of tens of thousands of small objects, rounded up).
 pub const SCENE_MEMORY_PER_BYTE: u64 = 64;
 
 /// The most objects a scene may have: every load checks them against each other for initial

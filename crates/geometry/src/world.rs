@@ -197,7 +197,7 @@ impl World {
 
     /// Builds the initial world of a loaded scene: loads each agent's URDF, checks the joint and
     /// link names the scene uses, applies the scene's posture, and refuses a world that starts
-    /// in collision ([`World::initial_overlap`]).
+    /// in collision (`World::initial_overlap`).
     pub fn from_scene(scene: Scene) -> Result<World, SceneError> {
         let world = World::unchecked(scene)?;
         match world.initial_overlap() {

@@ -415,7 +415,7 @@ fn what_the_other_gripper_holds_blocks_the_moving_arm() {
     assert!(hit(&fast) && !fast.is_config_free(&q));
 }
 
-/// Issue 11: a book carried in one hand passed through the book held in the other (fig4, give,
+/// A book carried in one hand must not pass through the book held in the other (fig4, give,
 /// transfer). The two held objects are tested against each other.
 #[test]
 fn the_two_held_objects_are_checked_against_each_other() {

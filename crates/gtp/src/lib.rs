@@ -30,7 +30,32 @@
 //! transfer, place, retreat and return, each collision-checked ([`robot`]) and the free-space
 //! ones planned with RRT-Connect ([`rrt`]). Failed points and grasps are remembered across
 //! effort levels. [`verify`] re-checks a solution independently.
-
+//!
+//! # Example
+//!
+//! Make the grey book of the library scene accessible to the member: the first solution puts
+//! it where the member sees and reaches it, and its world is the start of the next task.
+//!
+//! ```
+//! use geometry::world::World;
+//! use gtp::planner::{CallOptions, Planner};
+//!
+//! let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../domains/library/scene.toml");
+//! let world = World::load(scene)?;
+//! let planner = Planner::new();
+//! let mut stream =
+//!     planner.run(&world, "make-accessible", &["grey-book", "member"], &CallOptions::default())?;
+//! let solution = stream.next().expect("the library's grey book can be made accessible");
+//! let summary = &solution.summary;
+//! let placement = summary.placement.as_ref().expect("a make-accessible places the book");
+//! println!("on {:?} at {:?}, visibility {:?}", placement.support, placement.point, summary.visibility);
+//! assert!(summary.visibility.is_some_and(|v| v > 0.5));
+//! assert!(!summary.trajectories.is_empty());
+//! // The world after the solution: the book at its new place.
+//! let book = solution.world.object_id("grey-book").unwrap();
+//! assert_ne!(solution.world.object_pose(book), world.object_pose(book));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 pub mod grasp;
 pub mod gripper;
 mod nearest_kd_tree;

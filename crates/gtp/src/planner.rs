@@ -397,7 +397,7 @@ impl Planner {
 /// The solutions of one task call, produced lazily: the first, then on request the next
 /// different one (another point, grasp or orientation). When the task finds nothing from where
 /// the robot stands, the stream goes on from base poses nearby (the robot turns or steps,
-/// [`crate::search::BaseMoves`]); those solutions start with the drive.
+/// `crate::search::BaseMoves`); those solutions start with the drive.
 pub struct SolutionStream {
     task: Task,
     constraints: Constraints,

@@ -271,7 +271,7 @@ fn outcome(problem: &str, strategy: Strategy, crowded: bool) -> Outcome {
     plan(&d, &p, &opts, Some(&mut desk)).unwrap().outcome
 }
 
-/// Issue 11: a strategy that stops because it used up its geometric alternatives has proven
+/// A strategy that stops because it used up its geometric alternatives has proven
 /// nothing, so it reports a limit (exit 2), never "no plan exists". Here a plan exists (the
 /// first book at the back), which only chronological backtracking finds.
 #[test]

@@ -1,4 +1,4 @@
-//! Random layouts of a scene (`bench library --layout random`, issue 15 point 6): the movable
+//! Random layouts of a scene (`bench library --layout random`): the movable
 //! objects put anywhere sensible in the room and the people seated or standing at the counter,
 //! one layout per seed, where `bench library`'s nudges ([`crate::experiment::randomize`]) only
 //! move things by a few centimetres.

@@ -1,4 +1,4 @@
-//! How cost grows (issue 15 point 4): a generated family of library problems, MANAGEORDER with
+//! How cost grows: a generated family of library problems, MANAGEORDER with
 //! N books lent from the librarians' tables over a desk holding M other objects, several
 //! randomized scenes per (N, M), each planned once ([`run_scale`]).
 //!

@@ -22,12 +22,12 @@ pub const BASE_ANGULAR_ACCELERATION: f64 = 1.0;
 
 /// Largest time step between two samples of a segment (s; 10 Hz); samples are evenly spaced in
 /// time.
-const SAMPLE_STEP: f64 = 0.1;
+pub const SAMPLE_STEP: f64 = 0.1;
 /// Largest change of any joint between two samples (rad or m), so that the link-pose frames
 /// computed from the points are as dense as a swept collision check wants.
-const POSITION_STEP: f64 = 0.04;
+pub const POSITION_STEP: f64 = 0.04;
 /// Most samples per segment.
-const MAX_SAMPLES: usize = 400;
+pub const MAX_SAMPLES: usize = 400;
 
 /// One timed point: every joint's position and velocity at `time` seconds from the start.
 #[derive(Debug, Clone, PartialEq)]

@@ -45,7 +45,7 @@ pub enum AllowedReason {
     /// The model's SRDF says so (`<disable_collisions>`).
     Srdf,
     /// Their relative pose depends on at most one joint (the two fingers of a gripper, for
-    /// example), and a sweep of that joint's whole range at [`SWEEP_STEPS`] + 1 values found no
+    /// example), and a sweep of that joint's whole range at `SWEEP_STEPS` + 1 values found no
     /// contact, so they never collide.
     Never,
 }

@@ -1,4 +1,4 @@
-//! `htngtp bench domain DIR`: a domain's randomized benchmark (issue 15 point 3). Every problem
+//! `htngtp bench domain DIR`: a domain's randomized benchmark. Every problem
 //! of the folder is planned in its scene with the scene's movable objects nudged and its people
 //! moved per run, as `bench library` does, and the share of runs solved is reported with, for
 //! the failures, the geometric task and the constraint that stopped them.

@@ -1,5 +1,5 @@
-//! `bench library --layout random`: the report of the runs planned in random layouts (issue 15
-//! point 6): the share solved, run times, and the failures by GTP task and constraint.
+//! `bench library --layout random`: the report of the runs planned in random layouts
+//! the share solved, run times, and the failures by GTP task and constraint.
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -45,7 +45,7 @@ pub enum Target {
                   points, grasps, orientations, trajectory-planner calls, means per request), \
                   HTN backtracks per run, complete failures and the total time; writes CSV and \
                   JSON. Runs in parallel on all cores.\n\n`--layout random` plans each run in a \
-                  random layout of the scene instead (issue 15 point 6), generated from the \
+                  random layout of the scene instead, generated from the \
                   run's seed. Sensible means: every movable object (the books, the POS machine) \
                   on a free spot of any support surface of the room (desk, platform, POS stand, \
                   table, every shelf level), on any face (a book on its long edge, on its short \

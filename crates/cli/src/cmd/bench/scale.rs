@@ -142,8 +142,9 @@ fn print_stages(summary: &[CellSummary]) {
     }
 }
 
-/// The targets: per M, the median time per book at N = 8 at most twice that at N = 1;
-/// success at N = 8, M = 20 at least 90 %.
+/// The scaling targets the command reports: per M, the median time per book at N = 8 at most
+/// twice that at N = 1 (cost per book does not grow with N);
+/// and success at N = 8, M = 20 at least 90 %.
 fn print_targets(summary: &[CellSummary]) {
     let cell = |n: usize, m: usize| summary.iter().find(|c| c.books == n && c.others == m);
     let mut ms: Vec<usize> = summary.iter().map(|c| c.others).collect();

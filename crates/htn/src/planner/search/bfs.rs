@@ -333,8 +333,8 @@ impl<'a, 'o> Search<'a, 'o> {
     /// The best-first search, until a plan, exhaustion or a limit of the options. With the
     /// relaxed composition ground, a first phase ([`CHEAP_SHARE`] of the time left) runs
     /// with the state-free estimate, which is fast where h_add is slow to compute (Transport's
-    /// road networks: 3 of its problems solved in about 0.1 s there, none in 8 s with h_add),
-    /// then the search starts again with h_add (AssemblyHierarchical needs it).
+    /// road networks), then the search starts again with h_add, which domains whose
+    /// decompositions must be followed to the end need (AssemblyHierarchical).
     pub(super) fn best_first(&mut self) -> Stop {
         self.stats.best_first = true;
         self.reset();

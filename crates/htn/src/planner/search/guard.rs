@@ -15,7 +15,7 @@
 //! still false). If none is, the node is a dead end, however deep the search below it would
 //! go before finding out at the goal check.
 //!
-//! This is what loses Multiarm-Blocksworld: a block stacked in place (its `goal_on` fact
+//! The case it is for (IPC 2020's Multiarm-Blocksworld): a block stacked in place (its `goal_on` fact
 //! consumed, never to be added again) is unstacked again by a method that picks any clear
 //! block; the goal literal `(on b d)` can then only be achieved through `release-stack`,
 //! which requires the consumed fact, and the depth-first search finds out only after

@@ -8,8 +8,8 @@ use super::Search;
 
 /// Whether a table of `len` entries with room for `capacity` may double before the next
 /// check: one node's expansion inserts many entries (every method and binding, the heuristic's
-/// memo), so a table within 1/16 of full counts as doubling (a table doubled between two
-/// checks took Freecell 13-1 from 281 to 339 MB under a 300 MB limit).
+/// memo), so a table within 1/16 of full counts as doubling: a table that doubles between two
+/// checks holds its old and its new array at once and can pass the limit by its whole size.
 pub(super) fn may_double(len: usize, capacity: usize) -> bool {
     len.saturating_add((capacity / 16).max(256)) >= capacity
 }
