@@ -130,15 +130,14 @@ pub(crate) fn wrap(a: f32) -> f32 {
     s.rem_euclid(TAU) - PI
 }
 
+/// Below this many nodes a tree's nearest node is found by a scan: in seven joint dimensions
+/// a scan of a small tree is faster than the k-d tree's descent, a large tree's the reverse
+/// (`cargo bench -p gtp --bench rrt -- unconnectable` compares them).
+const SCAN_BELOW: usize = 1024;
+
 /// As [`JointSpace::distance_squared`] from `q` to a tree node `c`, with fewer branches: on a
 /// continuous joint, ends within [-pi, pi) (all but a root given out of range) differ by less
 /// than a turn, and one turn, added or taken, folds the difference.
-/// Below this many nodes a tree's nearest node is found by a scan, which is faster there than
-/// the k-d tree in seven joint dimensions (`cargo bench -p gtp --bench rrt -- unconnectable`:
-/// a failed query to 1,000 nodes takes 5.7 ms by scan, 8.0 ms by k-d tree, 6.3 ms mixed; to
-/// 5,000 nodes 148, 111 and 101 ms).
-const SCAN_BELOW: usize = 1024;
-
 fn distance_squared_to_node(space: &JointSpace, q: &[f32], c: &[f32]) -> f32 {
     let mut d2 = 0.0;
     for k in 0..c.len() {
