@@ -371,7 +371,11 @@ impl<'a, 'o> Search<'a, 'o> {
         self.load(init);
         let mut f = self.new_frontier(rc, until);
         let stop = self.best_first_over(&mut f);
-        drop_in_background(f);
+        match stop {
+            // The next phase or engine allocates its own tables: free these first.
+            Stop::Switch | Stop::Exhausted => drop(f),
+            Stop::Found | Stop::Limit(_) => drop_in_background(f),
+        }
         stop
     }
 
