@@ -129,3 +129,26 @@ fn the_plan_json_carries_the_convex_pieces_checked() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn the_real_grippers_turning_fingers_give_grasps() {
+    // The PR2's fingers turn (revolute joints): the jaw opening is measured between their
+    // pads, and the tool frame is the scene's hand link below the SRDF chain's wrist.
+    let dir = scratch("grasps");
+    let scene = real_pr2_scene(&dir);
+    let robots = root().join("../shared/robots");
+    let o = run(&[
+        "--package-path",
+        robots.to_str().unwrap(),
+        "gtp",
+        scene.to_str().unwrap(),
+        "pick",
+        "grey-book",
+        "--json",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stderr)));
+    let grasps = json["stats"]["grasps"].as_u64().unwrap_or(0);
+    assert!(grasps > 0, "no grasp for the real gripper: {json}");
+}

@@ -34,7 +34,8 @@ struct LinkBox {
 }
 
 /// How a joint between the gripper's root and one of its links takes its value from the
-/// opening: the gripper's joint (or one mimicking it) at `multiplier * opening / 2 + offset`,
+/// opening: the gripper's joint (or one mimicking it) at `multiplier * value + offset`, `value`
+/// the finger joint's ([`GripperModel::joint_value`]),
 /// any other joint at its value in the model's default configuration (`multiplier` 0).
 #[derive(Clone, Debug)]
 struct PathJoint {
@@ -60,8 +61,12 @@ pub struct GripperModel {
     /// The widest jaw opening the planner uses: twice the gripper joint's upper limit, at most
     /// [`OPENING_CAP`] (metres; 0 without a gripper joint, a person's hand).
     pub max_opening: f32,
-    /// The finger joint's limits as an opening (`2 x` the joint's), to clamp openings to.
+    /// The finger joint's limits as an opening, to clamp openings to.
     opening_range: (f32, f32),
+    /// For a finger joint that turns (a revolute joint, as the PR2's): (jaw gap, joint value)
+    /// pairs from the joint's lower limit to its upper, measured between the fingers' boxes;
+    /// empty for a sliding finger, whose value is half the opening.
+    turns: Vec<(f32, f32)>,
     /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
     /// by it).
     key: u64,
@@ -100,8 +105,15 @@ impl GripperModel {
             links: boxes,
             max_opening: range.1.min(OPENING_CAP),
             opening_range: range,
+            turns: Vec::new(),
             key: 0,
         };
+        let turning = dof.is_some_and(|k| {
+            model.joints()[model.dof_joint(k)].kind != geometry::agent::JointKind::Prismatic
+        });
+        if let (true, Some(k)) = (turning, dof) {
+            gripper.measure_turns(model.dof_limits()[k]);
+        }
         gripper.key = gripper.dimensions_key();
         gripper
     }
@@ -123,17 +135,100 @@ impl GripperModel {
     /// finger joint's range.
     pub fn at(&self, opening: f32) -> Gripper {
         let opening = opening.clamp(self.opening_range.0, self.opening_range.1);
-        let tool = pose_along(&self.tool_path, opening);
-        let to_tool = tool.inverse();
-        let mut boxes = Vec::new();
-        for link in &self.links {
-            let pose = to_tool * pose_along(&link.path, opening);
-            boxes.extend(link.boxes.iter().map(|b| (pose * b.in_link, b.cuboid)));
-        }
+        let boxes = self.boxes_at_value(self.joint_value(opening));
         Gripper { boxes, opening }
     }
 
-    /// The widest jaw opening of the model (twice the finger joint's upper limit).
+    /// The finger joint's value for a jaw opening: half of it for a sliding finger; for a
+    /// turning one, the value whose measured gap is the opening (interpolated).
+    pub fn joint_value(&self, opening: f32) -> f32 {
+        let Some(&(first_gap, first)) = self.turns.first() else {
+            return opening / 2.0;
+        };
+        if opening <= first_gap {
+            return first;
+        }
+        for w in self.turns.windows(2) {
+            let ((g0, v0), (g1, v1)) = (w[0], w[1]);
+            if opening <= g1 {
+                let t = if g1 > g0 {
+                    (opening - g0) / (g1 - g0)
+                } else {
+                    1.0
+                };
+                return v0 + t * (v1 - v0);
+            }
+        }
+        self.turns.last().map_or(first, |&(_, v)| v)
+    }
+
+    /// The boxes in the tool frame with the finger joint at `value`.
+    fn boxes_at_value(&self, value: f32) -> Vec<(Pose, Cuboid)> {
+        let to_tool = pose_along(&self.tool_path, value).inverse();
+        let mut boxes = Vec::new();
+        for link in &self.links {
+            let pose = to_tool * pose_along(&link.path, value);
+            boxes.extend(link.boxes.iter().map(|b| (pose * b.in_link, b.cuboid)));
+        }
+        boxes
+    }
+
+    /// Measures a turning finger joint's jaw gap over its range (`turns`), and sets the
+    /// opening range and the widest opening from it. The gap is along the tool frame's y (the
+    /// closing axis) between the inner faces of the boxes that move with the joint, those on
+    /// +y against those on -y; without boxes on both sides the joint is taken as sliding.
+    fn measure_turns(&mut self, limits: geometry::agent::JointLimits) {
+        const STEPS: usize = 64;
+        let mut turns: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
+        for i in 0..=STEPS {
+            let value = limits.lower + (limits.upper - limits.lower) * i as f32 / STEPS as f32;
+            let Some(gap) = self.finger_gap(value) else {
+                return;
+            };
+            // Keep the gap growing with the value: a joint past its widest is not used.
+            if turns.last().is_none_or(|&(g, _)| gap > g) {
+                turns.push((gap, value));
+            }
+        }
+        if let (Some(&(lo, _)), Some(&(hi, _))) = (turns.first(), turns.last()) {
+            self.opening_range = (lo.max(0.0), hi.max(0.0));
+            self.max_opening = self.opening_range.1.min(OPENING_CAP);
+            self.turns = turns;
+        }
+    }
+
+    /// The gap between the fingertips' inner faces along the tool frame's y with the finger
+    /// joint at `value`: on each side (+y, -y) the moving box that reaches furthest forward
+    /// (along x, the approach), the pad that closes on the object; `None` without moving boxes
+    /// on both sides.
+    fn finger_gap(&self, value: f32) -> Option<f32> {
+        let to_tool = pose_along(&self.tool_path, value).inverse();
+        // Per side: (forward reach, inner face).
+        let (mut left, mut right) = (None::<(f32, f32)>, None::<(f32, f32)>);
+        for link in self
+            .links
+            .iter()
+            .filter(|l| l.path.iter().any(|p| p.multiplier != 0.0))
+        {
+            let pose = to_tool * pose_along(&link.path, value);
+            for b in &link.boxes {
+                let aabb = b.cuboid.compute_aabb(&(pose * b.in_link));
+                let (side, face) = if aabb.center().y >= 0.0 {
+                    (&mut left, aabb.mins.y)
+                } else {
+                    (&mut right, aabb.maxs.y)
+                };
+                if side.is_none_or(|(reach, _)| aabb.maxs.x > reach) {
+                    *side = Some((aabb.maxs.x, face));
+                }
+            }
+        }
+        let (left, right) = (left?.1, right?.1);
+        Some(left - right)
+    }
+
+    /// The widest jaw opening of the model (twice a sliding finger joint's upper limit, a
+    /// turning one's measured gap at its upper limit).
     pub fn model_opening(&self) -> f32 {
         self.opening_range.1
     }
@@ -249,10 +344,11 @@ fn link_boxes(model: &AgentModel, link: usize) -> Vec<LinkBox> {
         .collect()
 }
 
-/// The pose a joint path puts its link at (in the path's root frame) for a jaw opening.
-fn pose_along(path: &[PathJoint], opening: f32) -> Pose {
+/// The pose a joint path puts its link at (in the path's root frame) with the finger joint at
+/// `value`.
+fn pose_along(path: &[PathJoint], value: f32) -> Pose {
     path.iter().fold(Pose::IDENTITY, |pose, p| {
-        pose * p.joint.transform(p.multiplier * opening / 2.0 + p.offset)
+        pose * p.joint.transform(p.multiplier * value + p.offset)
     })
 }
 
@@ -366,5 +462,62 @@ pub(crate) mod tests {
         // The PR2's two grippers are the same (one grasp set serves both).
         let left = GripperModel::of_named_arm(&model("pr2"), "left_arm").expect("arm");
         assert_eq!(left.key(), pr2_gripper().key());
+    }
+    /// A one-joint arm ending in a palm with two fingers on revolute joints (the second
+    /// mimicking the first), each with a 1 cm pad 8 cm ahead of its knuckle.
+    fn turning_finger_model() -> AgentModel {
+        let finger = |side: &str, y: f32, axis: f32, mimic: &str| {
+            format!(
+                r#"<link name="{side}_finger"><collision><origin xyz="0.08 0 0"/><geometry><box size="0.02 0.01 0.02"/></geometry></collision></link>
+                <joint name="{side}_finger_joint" type="revolute"><parent link="palm"/><child link="{side}_finger"/>
+                  <origin xyz="0.02 {y} 0"/><axis xyz="0 0 {axis}"/><limit lower="0" upper="0.5" effort="1" velocity="1"/>{mimic}</joint>"#
+            )
+        };
+        let urdf = format!(
+            r#"<robot name="turning"><link name="base"/><link name="wrist"/>
+            <joint name="wrist_joint" type="revolute"><parent link="base"/><child link="wrist"/><axis xyz="1 0 0"/>
+              <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+            <link name="palm"><collision><geometry><box size="0.04 0.06 0.04"/></geometry></collision></link>
+            <joint name="palm_joint" type="fixed"><parent link="wrist"/><child link="palm"/></joint>
+            <link name="tool"/><joint name="tool_joint" type="fixed"><parent link="palm"/><child link="tool"/><origin xyz="0.1 0 0"/></joint>
+            {}{}</robot>"#,
+            finger("l", 0.015, 1.0, ""),
+            finger("r", -0.015, -1.0, r#"<mimic joint="l_finger_joint"/>"#)
+        );
+        let srdf = r#"<robot name="turning"><group name="arm"><chain base_link="base" tip_link="tool"/></group>
+            <group name="hand"><joint name="l_finger_joint"/><joint name="r_finger_joint"/></group>
+            <end_effector name="ee" parent_link="tool" group="hand" parent_group="arm"/></robot>"#;
+        AgentModel::from_urdf_str(&urdf, "turning.urdf")
+            .and_then(|m| m.with_srdf_str(srdf, "turning.srdf"))
+            .expect("test model")
+    }
+
+    #[test]
+    fn a_turning_finger_opens_the_jaws_by_the_gap_measured_between_its_pads() {
+        let gripper = GripperModel::of_named_arm(&turning_finger_model(), "arm").expect("arm");
+        // Closed (0 rad) the pads' inner faces are 2 x (0.015 - 0.005) = 20 mm apart; at the
+        // upper limit each pad has swung out by about 0.08 sin 0.5.
+        let (lo, hi) = gripper.opening_range;
+        assert!((lo - 0.02).abs() < 1e-3, "closed gap {lo}");
+        assert!(hi > 0.07 && hi < 0.1, "widest gap {hi}");
+        assert_eq!(gripper.max_opening, hi.min(OPENING_CAP));
+        for opening in [0.03, 0.05, 0.07] {
+            let value = gripper.joint_value(opening);
+            assert!(value > 0.0 && value < 0.5, "{opening}: {value}");
+            let gap = gripper.finger_gap(value).expect("pads on both sides");
+            assert!((gap - opening).abs() < 1e-3, "{opening}: gap {gap}");
+        }
+        // Wider openings widen the boxes' span along the closing axis.
+        let span = |o: f32| {
+            let (lo, hi) = gripper.at(o).bounds();
+            hi.y - lo.y
+        };
+        assert!(span(0.07) > span(0.03) + 0.03);
+    }
+
+    #[test]
+    fn a_sliding_finger_takes_half_the_opening() {
+        let gripper = pr2_gripper();
+        assert_eq!(gripper.joint_value(0.06), 0.03);
     }
 }

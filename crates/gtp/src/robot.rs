@@ -126,7 +126,7 @@ impl RobotSetup {
             let Ok(chain) = model.chain(&name) else {
                 continue;
             };
-            let tool_link = chain.tip_link;
+            let (chain, tool_link) = tool_chain(&model, chain, &world.agent(agent).hand_links);
             // The gripper's joint: the first joint of the arm's end-effector group that mimics
             // none (a person's hand has none).
             let gripper_dof = model
@@ -300,7 +300,7 @@ pub fn set_arm_values(arm: &Arm, q: &mut [f32], values: &[f32]) {
 /// Sets the gripper's finger joint for a jaw opening (clamped to the joint's limits).
 pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
     if let Some(k) = arm.gripper_dof {
-        q[k] = model.dof_limits()[k].clamp(opening / 2.0);
+        q[k] = model.dof_limits()[k].clamp(arm.gripper.joint_value(opening));
     }
 }
 
@@ -609,5 +609,36 @@ impl<'a> ArmMotion<'a> {
             checker.is_config_free(&full)
         };
         rrt::plan(&self.arm.space, from, to, valid, params, rng).map_err(|(e, _)| e)
+    }
+}
+
+/// An arm's chain extended to its tool frame, and the tool frame: the agent's hand link (the
+/// scene's `hands`, by default the SRDF chain tips) that hangs below the chain's tip, such as a
+/// gripper's tool frame below the wrist that ends a MoveIt arm group; the tip itself when no
+/// hand link hangs below it. The extension adds fixed joints only (the arm's joints are the
+/// same), so inverse kinematics places the tool frame itself.
+fn tool_chain(
+    model: &AgentModel,
+    chain: KinematicChain,
+    hands: &[usize],
+) -> (KinematicChain, usize) {
+    let below = hands
+        .iter()
+        .copied()
+        .find(|&h| h != chain.tip_link && model.is_descendant(h, chain.tip_link));
+    let Some(tool) = below else {
+        let tip = chain.tip_link;
+        return (chain, tip);
+    };
+    let links = model.links();
+    match model.chain_between(&links[chain.root_link].name, &links[tool].name) {
+        Ok(mut extended) if extended.dofs == chain.dofs => {
+            extended.name = chain.name.clone();
+            (extended, tool)
+        }
+        _ => {
+            let tip = chain.tip_link;
+            (chain, tip)
+        }
     }
 }
