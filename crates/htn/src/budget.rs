@@ -4,6 +4,9 @@
 //! steps and stop with an error when it is spent. [`tripped`] then says which limit it was, so
 //! that the binary ends with exit 2 (a limit), not 3 (bad input). Without a budget (library
 //! use, tests) every check passes.
+//!
+//! [`Watch`] is the deadline and memory cap itself; the planner's compiler and search each
+//! hold one for their own limits (the search's joins and expansions poll it too).
 
 use std::cell::Cell;
 use std::sync::Mutex;
