@@ -58,8 +58,8 @@ pub struct GripperModel {
     /// The tool frame's joints from the gripper's root (fixed ones, as a rule).
     tool_path: Vec<PathJoint>,
     links: Vec<GripperLink>,
-    /// The widest jaw opening the planner uses: twice the gripper joint's upper limit, at most
-    /// [`OPENING_CAP`] (metres; 0 without a gripper joint, a person's hand).
+    /// The widest jaw opening the planner uses: the model's ([`GripperModel::model_opening`]),
+    /// at most [`OPENING_CAP`] (metres; 0 without a gripper joint, a person's hand).
     pub max_opening: f32,
     /// The finger joint's limits as an opening, to clamp openings to.
     opening_range: (f32, f32),
@@ -108,10 +108,9 @@ impl GripperModel {
             turns: Vec::new(),
             key: 0,
         };
-        let turning = dof.is_some_and(|k| {
-            model.joints()[model.dof_joint(k)].kind != geometry::agent::JointKind::Prismatic
-        });
-        if let (true, Some(k)) = (turning, dof) {
+        if let Some(k) = dof
+            && model.joints()[model.dof_joint(k)].kind != geometry::agent::JointKind::Prismatic
+        {
             gripper.measure_turns(model.dof_limits()[k]);
         }
         gripper.key = gripper.dimensions_key();

@@ -39,7 +39,7 @@ struct Control<'p> {
     /// Positions in the enclosing choices, outermost first.
     path: Vec<u32>,
     /// The path of the binding to resume after.
-    resume: Vec<u32>,
+    resume: &'p [u32],
     /// Still descending along `resume` (each choice starts at its position there).
     resuming: bool,
     poll: Option<&'p dyn Fn() -> bool>,
@@ -212,7 +212,7 @@ impl Eval<'_> {
     ) -> (Enumerated, Option<Cursor>) {
         let mut done = vec![false; lits.len()];
         let mut ctl = Control {
-            resume: after.map(|c| c.0.clone()).unwrap_or_default(),
+            resume: after.map_or(&[], |c| &c.0),
             resuming: after.is_some(),
             poll: Some(poll),
             ..Control::default()

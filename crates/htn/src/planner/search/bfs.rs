@@ -553,13 +553,6 @@ impl<'a, 'o> Search<'a, 'o> {
     /// Node `ni`'s successors by every method and binding of its first task, in domain order.
     fn bfs_decompose(&mut self, f: &mut Frontier, ni: u32, cell: Cell) {
         let c = self.c;
-        let node = &f.nodes[ni as usize];
-        let (sid, next_occ, g) = (node.state, node.next_occ, node.g);
-        let rest_cost = if cell.next == NIL {
-            0
-        } else {
-            f.cell_cost[cell.next as usize]
-        };
         for &m in self.methods_of(cell.task) {
             let stride = c.methods[m as usize].n_params;
             let mut after = None;
@@ -574,8 +567,7 @@ impl<'a, 'o> Search<'a, 'o> {
                         return;
                     }
                     let binding = &bindings[i * stride..(i + 1) * stride];
-                    let at = (sid, next_occ, g, rest_cost);
-                    self.bfs_push_decomposition(f, ni, cell, m, binding, at);
+                    self.bfs_push_decomposition(f, ni, cell, m, binding);
                 }
                 match more {
                     Some(cursor) => after = Some(cursor),
@@ -586,8 +578,7 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     /// The successor of node `ni` that decomposes its first task `cell` by method `m` under
-    /// `binding`, pushed unless it is a dead end or seen; `at` is the node's state, next
-    /// occurrence, cost so far and the rest of its network's cost.
+    /// `binding`, pushed unless it is a dead end or seen.
     fn bfs_push_decomposition(
         &mut self,
         f: &mut Frontier,
@@ -595,41 +586,44 @@ impl<'a, 'o> Search<'a, 'o> {
         cell: Cell,
         m: u32,
         binding: &[u32],
-        at: (u32, u32, u32, u32),
     ) {
-        let (sid, next_occ, g, rest_cost) = at;
+        let node = &f.nodes[ni as usize];
+        let (sid, next_occ, g) = (node.state, node.next_occ, node.g);
+        let rest_cost = if cell.next == NIL {
+            0
+        } else {
+            f.cell_cost[cell.next as usize]
+        };
         let c = self.c;
-        {
-            let subs = &c.methods[m as usize].subtasks;
-            let n = subs.len() as u32;
-            let (top, h) = self.push_network(subs, binding, next_occ, cell.next, rest_cost, f);
-            if h >= INF {
-                return;
-            }
-            if !f.seen.insert((sid, self.network_hash(top))) {
-                self.stats.revisits_pruned += 1;
-                return;
-            }
-            let h = self.net_estimate(top, sid, &mut f.hr, &f.cell_cost);
-            if h >= INF {
-                return;
-            }
-            let node = Node {
-                parent: ni,
-                state: sid,
-                tn: top,
-                next_occ: next_occ + n,
-                g,
-                op: Op::Method {
-                    occ: cell.occ,
-                    task: cell.task,
-                    method: m,
-                    first: next_occ,
-                    n,
-                },
-            };
-            f.push(node, prio(g, h, G_WEIGHT, f.wh));
+        let subs = &c.methods[m as usize].subtasks;
+        let n = subs.len() as u32;
+        let (top, h) = self.push_network(subs, binding, next_occ, cell.next, rest_cost, f);
+        if h >= INF {
+            return;
         }
+        if !f.seen.insert((sid, self.network_hash(top))) {
+            self.stats.revisits_pruned += 1;
+            return;
+        }
+        let h = self.net_estimate(top, sid, &mut f.hr, &f.cell_cost);
+        if h >= INF {
+            return;
+        }
+        let node = Node {
+            parent: ni,
+            state: sid,
+            tn: top,
+            next_occ: next_occ + n,
+            g,
+            op: Op::Method {
+                occ: cell.occ,
+                task: cell.task,
+                method: m,
+                first: next_occ,
+                n,
+            },
+        };
+        f.push(node, prio(g, h, G_WEIGHT, f.wh));
     }
 
     /// What the grounding of the relaxed composition may spend: its caps, a share of the

@@ -60,8 +60,9 @@ pub(super) struct Caps {
 }
 
 impl Caps {
-    /// Whether the deadline has passed or the resident memory is over its cap (a join's poll,
-    /// every few thousand steps: reading the memory costs a few microseconds).
+    /// Whether the deadline has passed or the resident memory is over its cap (asked every few
+    /// hundred grounding steps and every few thousand join steps: reading the memory costs a
+    /// few microseconds).
     fn spent(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)
             || self.memory_kb.is_some_and(|kb| current_rss_kb() > kb)
@@ -240,13 +241,8 @@ impl Grounder<'_> {
             return true;
         }
         self.checks = self.checks.wrapping_add(1);
-        if self.checks % 256 == 0 {
-            if self.caps.deadline.is_some_and(|d| Instant::now() >= d) {
-                self.over = true;
-            }
-            if self.caps.memory_kb.is_some_and(|kb| current_rss_kb() > kb) {
-                self.over = true;
-            }
+        if self.checks % 256 == 0 && self.caps.spent() {
+            self.over = true;
         }
         self.over
     }
@@ -319,17 +315,11 @@ impl Grounder<'_> {
                 types,
             };
             let caps = self.caps;
-            let mut count = 0u32;
+            // The join polls the deadline and the memory cap itself.
             let poll = || caps.spent();
             let (how, _) = ev.solve_from(lits, &mut b, need, None, &poll, &mut |b| {
                 found.push(b.to_vec());
-                count = count.wrapping_add(1);
-                if found.len() > caps.methods {
-                    stop = true;
-                }
-                if count % 256 == 0 && caps.deadline.is_some_and(|d| Instant::now() >= d) {
-                    stop = true;
-                }
+                stop = found.len() > caps.methods;
                 stop
             });
             stop |= how == Enumerated::Aborted;
