@@ -91,9 +91,15 @@ impl Watch {
     /// Whether `bytes` more would still fit under the memory cap (less its headroom); if not,
     /// the memory limit is passed.
     pub fn fits(&self, bytes: u64) -> bool {
+        self.stop_kb.is_none() || self.fits_at(current_rss_kb(), bytes)
+    }
+
+    /// [`Watch::fits`] with the resident memory `rss_kb` read by the caller (one that reads
+    /// it less often than it asks).
+    pub fn fits_at(&self, rss_kb: u64, bytes: u64) -> bool {
         let fits = self
             .stop_kb
-            .is_none_or(|kb| current_rss_kb().saturating_add(bytes >> 10) <= kb);
+            .is_none_or(|kb| rss_kb.saturating_add(bytes >> 10) <= kb);
         if !fits {
             self.passed.set(Some(Limit::Memory));
         }

@@ -416,6 +416,17 @@ impl<'a, 'o> Search<'a, 'o> {
         Stop::Exhausted
     }
 
+    /// Whether the tables about to double (the frontier's and the network cells) fit within
+    /// the memory limit, with the resident memory read at most every [`RSS_EVERY`]; if not,
+    /// the memory limit is passed. Asked per node and per successor: one node's successors
+    /// can double a table of hundreds of MB.
+    fn frontier_fits(&mut self, f: &mut Frontier) -> bool {
+        let growth = f.growth() + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
+        growth == 0
+            || self.opts.limits.memory_mb.is_none()
+            || self.watch.fits_at(f.rss.get(), growth as u64)
+    }
+
     /// The open list of a new best-first search with heuristic `rc` (the state-free estimate
     /// when `None`), and the initial state interned.
     fn new_frontier(&mut self, rc: Option<Rc>, until: Option<std::time::Instant>) -> Frontier {
@@ -454,7 +465,7 @@ impl<'a, 'o> Search<'a, 'o> {
         let (bindings, count) = self.bindings(root, NIL);
         let stride = c.methods[root as usize].n_params;
         for i in 0..count {
-            if self.watch.check().is_some() {
+            if self.watch.check().is_some() || !self.frontier_fits(f) {
                 return;
             }
             let binding = bindings[i * stride..(i + 1) * stride].to_vec();
@@ -484,11 +495,7 @@ impl<'a, 'o> Search<'a, 'o> {
     /// The limit that stops the search now, if any: memory (the tables' coming growth
     /// counted before it happens), time or nodes.
     fn bfs_limit(&mut self, f: &mut Frontier) -> Option<Stop> {
-        let growth = f.growth() + vec_growth::<Cell>(self.arena.len(), self.arena.capacity());
-        if growth > 0
-            && let Some(mb) = self.opts.limits.memory_mb
-            && f.rss.get().saturating_add(growth as u64 >> 10) > mb.saturating_mul(1024)
-        {
+        if !self.frontier_fits(f) {
             return Some(Stop::Limit(Limit::Memory));
         }
         if let Some(l) = self.check_limits() {
@@ -561,7 +568,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 let (bindings, count, more) =
                     self.bindings_after(m, cell.task, after.as_ref(), MAX_CHUNK);
                 for i in 0..count {
-                    if self.watch.check().is_some() {
+                    if self.watch.check().is_some() || !self.frontier_fits(f) {
                         // A node of many successors: the limit stops it midway (the caller
                         // sees the limit at its next node).
                         return;
