@@ -81,9 +81,9 @@ fn facts_read_the_real_pr2() {
 #[test]
 #[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
 fn the_plan_json_carries_the_convex_pieces_checked() {
+    // The shipped real-PR2 library scene: fig4 is planned with every geometric task solved,
+    // and `htngtp check` finds the plan clean, the turning fingers closed on what they hold.
     let dir = scratch("json");
-    let scene = real_pr2_scene(&dir);
-    let robots = root().join("../shared/robots");
     let json = dir.join("plan.json");
     let lib = root().join("domains/library");
     let o = run(&[
@@ -91,15 +91,18 @@ fn the_plan_json_carries_the_convex_pieces_checked() {
         lib.join("domain.hddl").to_str().unwrap(),
         lib.join("fig4.hddl").to_str().unwrap(),
         "--scene",
-        scene.to_str().unwrap(),
-        "--package-path",
-        robots.to_str().unwrap(),
+        lib.join("scene-real-pr2.toml").to_str().unwrap(),
         "--json-out",
         json.to_str().unwrap(),
         "--time-limit",
         "60",
     ]);
-    assert!(json.is_file(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let plan: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let pr2 = plan["scene"]["agents"]
@@ -120,6 +123,13 @@ fn the_plan_json_carries_the_convex_pieces_checked() {
     for m in &meshes {
         assert!(m["vertices"].as_array().unwrap().len() >= 4);
     }
+    let geometric = plan["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["gtp"].is_object())
+        .count();
+    assert!(geometric >= 4, "{geometric} geometric steps");
     let o = run(&["check", json.to_str().unwrap()]);
     assert_eq!(
         o.status.code(),

@@ -201,11 +201,16 @@ pub fn trajectory_json(
         .or_else(|| attached_link(&world, agent, t))
         .or_else(|| t.held.as_ref().and(cx.held_link))
         .or_else(|| model.chain(&t.arm).ok().map(|c| c.tip_link));
-    let gripper = cx.arm.and_then(|a| a.gripper_dof).map(|k| {
-        let from = world.agent_state(agent).q[k];
-        let to = model.dof_limits()[k].clamp(t.gripper_opening / 2.0);
-        (k, from, to)
-    });
+    // The finger joint's value for the jaw opening, by the arm's gripper model (half the
+    // opening for sliding fingers, an angle for turning ones).
+    let gripper = cx
+        .arm
+        .and_then(|a| Some((a, a.gripper_dof?)))
+        .map(|(a, k)| {
+            let from = world.agent_state(agent).q[k];
+            let to = model.dof_limits()[k].clamp(a.gripper.joint_value(t.gripper_opening));
+            (k, from, to)
+        });
     let holding = t.held.as_ref().map(|h| h.object.clone());
     let steps = GRIPPER_POINTS.min(points.len().saturating_sub(1)).max(1);
     let (mut frames, mut json_points) = (Vec::new(), Vec::new());
