@@ -1,136 +1,218 @@
 #!/usr/bin/env python3
-"""htngtp on an IPC-style HDDL suite through Downward Lab: one run per (algorithm, problem),
-the official verifier on each plan when given, a report of coverage, time, memory and
-verdicts per domain (HTML), and the parsed properties (JSON).
+"""htngtp on an HDDL suite through Downward Lab: one run per algorithm and problem, the
+official verifier on each plan when given, reports per domain.
 
-    python experiments/hddl.py --suite ../shared/benchmarks/ipc2020-total-order \\
-        --verifier /tmp/pandaPIparser/pandaPIparser --all          # build, run, fetch, report
+  python experiments/hddl.py --suite ../shared/benchmarks/ipc2020-total-order \\
+      --verifier /tmp/pandaPIparser/pandaPIparser --fresh --all
 
-Algorithms are binaries (`--binary NAME=PATH`, repeatable; default the release build) and
-options for them (`--option NAME=ARGS`, repeatable, e.g. `chrono="--seed 1"`). Runs go on all
-cores of this machine, or on a Slurm grid with `--slurm PARTITION` (with `--slurm-memory`,
-`--slurm-time`). Lab's own step arguments work as well (`1 2 3`, `--all`, `build`...).
+The suite is an IPC-style folder (one folder per domain; `domain.hddl`, or `P-domain.hddl`
+beside problem `P.hddl`) or a list file, one problem a line:
+`DOMAIN-NAME DOMAIN-FILE PROBLEM-FILE [SCENE-FILE]` (paths relative to the list; `#` comments;
+with a scene, htngtp plans with the GTP in it).
+
+Algorithms: htngtp binaries (`--binary NAME=PATH`; default the release build), git revisions
+of this checkout (`--revision NAME=REV`: Lab's cached revisions, built once into
+--revision-cache with `cargo build --release -p htngtp`), each crossed with configurations
+(`--option NAME="htngtp plan options"`, e.g. `bfs="--best-first-share 1"`), and anchor
+planners you installed (`--anchor NAME="COMMAND {domain} {problem}"`; see run_hddl.py --help
+for how their plans are read). An algorithm is named BINARY or BINARY-OPTION.
+
+Parsed per run (experiments/run_hddl.py): outcome (solved, unsolvable, limit, no-plan, error),
+coverage, unsolvable, limit (which) and limit_time/limit_memory, time, solve_time, wall_time,
+memory (peak KiB), nodes, plan_length, validated, and with --verifier the official verdict
+(verdict, verified, rejected).
+
+Reports in PATH-eval: report.html (absolute, per domain), compare-A-B.html and scatter-A-B.png
+(solve_time of B against A) per --compare pair, runs.csv/runs.json (every run's attributes),
+coverage.csv (solved per domain and algorithm), properties (Lab's JSON).
 """
 import argparse
-import json
 import os
 import shlex
 import sys
 from pathlib import Path
 
-from lab.environments import LocalEnvironment, SlurmEnvironment
-from lab.experiment import Experiment
-from lab.parser import Parser
-from lab.reports import Attribute, geometric_mean
-from downward.reports.absolute import AbsoluteReport
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import common  # noqa: E402
+from common import ROOT, HERE, fail  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+__doc__ += common.STEPS_HELP
 
 
-def problems(suite, domains, first):
-    """(domain name, domain file, problem file) of every problem of the suite, by the
-    benchmarks' conventions (`domain.hddl`, or `X-domain.hddl` beside `X.hddl`)."""
-    for d in sorted(p for p in Path(suite).iterdir() if p.is_dir()):
+def folder_problems(suite, domains, first):
+    """(domain name, domain file, problem file, None) of every problem of an IPC-style folder."""
+    dirs = sorted(p for p in Path(suite).iterdir() if p.is_dir())
+    if not dirs:
+        fail(f"--suite {suite}: no domain folders in it")
+    for d in dirs:
         if domains and not any(x.lower() in d.name.lower() for x in domains):
             continue
-        files = sorted(f for f in d.glob("*.hddl") if "domain" not in f.name)
+        files = sorted(f for f in d.glob("*.hddl") if "domain" not in f.name.lower())
         for f in files[:first] if first else files:
             own = f.with_name(f.stem + "-domain.hddl")
-            yield d.name, (own if own.exists() else d / "domain.hddl"), f
+            dfile = own if own.exists() else d / "domain.hddl"
+            if not dfile.exists():
+                fail(f"{f}: neither {own.name} nor domain.hddl beside it")
+            yield d.name, dfile.resolve(), f.resolve(), None
 
 
-def parse_result(content, props):
-    for line in content.splitlines():
-        if line.startswith("htngtp-result: "):
-            r = json.loads(line[len("htngtp-result: "):])
-            props["status"] = r.get("status")
-            props["limit"] = r.get("limit")
-            props["coverage"] = int(r.get("status") == "found")
-            props["unsolvable"] = int(r.get("status") == "unsolvable")
-            for k in ("time_s", "nodes", "peak_memory_kb", "plan_length", "exit_code"):
-                if r.get(k) is not None:
-                    props[k] = r[k]
-            if "official" in r:
-                props["official"] = r["official"]
-                props["accepted"] = int(r["official"] == "true")
-                props["rejected"] = int(r["official"] == "false")
-            if r.get("status") == "found" and r.get("time_s") is not None:
-                props["solve_time"] = r["time_s"]
+def list_problems(listfile, domains, first):
+    """The problems of a suite list: `DOMAIN-NAME DOMAIN-FILE PROBLEM-FILE [SCENE-FILE]`."""
+    base = Path(listfile).resolve().parent
+    taken = {}
+    for n, line in enumerate(Path(listfile).read_text().splitlines(), 1):
+        words = line.split("#", 1)[0].split()
+        if not words:
+            continue
+        if len(words) not in (3, 4):
+            fail(f"{listfile}:{n}: expected DOMAIN-NAME DOMAIN-FILE PROBLEM-FILE [SCENE-FILE]")
+        name, files = words[0], [base / w for w in words[1:]]
+        for f in files:
+            if not f.is_file():
+                fail(f"{listfile}:{n}: {f} is not a file")
+        if domains and not any(x.lower() in name.lower() for x in domains):
+            continue
+        taken[name] = taken.get(name, 0) + 1
+        if first and taken[name] > first:
+            continue
+        yield (name, files[0].resolve(), files[1].resolve(),
+               files[2].resolve() if len(files) == 3 else None)
 
 
-def named(pairs, default):
+def cached_revisions(revisions, cache):
+    """NAME -> the htngtp binary of each git revision, built once into the cache."""
+    from lab.cached_revision import CachedRevision
+
+    target = Path(cache) / "cargo-target"
+    build = ["sh", "-c", f"cargo build --release -p htngtp --target-dir '{target}' && "
+             f"cp '{target}/release/htngtp' htngtp"]
     out = {}
-    for p in pairs or []:
-        name, _, value = p.partition("=")
-        out[name] = value
-    return out or default
+    for name, rev in revisions.items():
+        if os.system(f"git -C '{ROOT}' rev-parse --verify --quiet '{rev}^{{commit}}' >/dev/null"):
+            fail(f"--revision {name}={rev}: not a commit of {ROOT}")
+        cr = CachedRevision(str(cache), str(ROOT), rev, build,
+                            exclude=["viewer", "docs", "experiments", "python"])
+        cr.cache()
+        binary = cr.path / "htngtp"
+        if not binary.is_file():
+            fail(f"--revision {name}={rev}: the build left no binary at {binary}")
+        out[name] = binary
+    return out
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--suite", required=True, help="an IPC-style folder: one folder per domain")
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=common.help_formatter())
+    ap.add_argument("--suite", required=True,
+                    help="an IPC-style folder (one folder per domain) or a suite list file")
     ap.add_argument("--domain", action="append", help="only domains whose name contains this")
     ap.add_argument("--first", type=int, help="only the first N problems of each domain")
-    ap.add_argument("--binary", action="append", help="NAME=PATH of an htngtp binary (repeatable)")
-    ap.add_argument("--option", action="append", help="NAME=ARGS: extra `plan` options (repeatable)")
-    ap.add_argument("--time-limit", type=int, default=10, help="seconds per run (htngtp's and Lab's)")
-    ap.add_argument("--memory-limit", type=int, default=2048, help="MiB per run")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--binary", action="append", metavar="NAME=PATH",
+                    help="an htngtp binary (repeatable; default htngtp=target/release/htngtp)")
+    ap.add_argument("--revision", action="append", metavar="NAME=REV",
+                    help="a git revision of this checkout, built and cached (repeatable)")
+    ap.add_argument("--revision-cache", default=str(ROOT / "target" / "lab-revision-cache"),
+                    help="where revisions are checked out and built (default target/lab-revision-cache)")
+    ap.add_argument("--option", action="append", metavar="NAME=ARGS",
+                    help="a configuration: extra `htngtp plan` options, crossed with every "
+                    "binary and revision (repeatable)")
+    ap.add_argument("--anchor", action="append", metavar="NAME=COMMAND",
+                    help="another planner you installed: a command with {domain} and {problem}")
+    ap.add_argument("--time-limit", type=int, default=10, help="seconds per run (default 10)")
+    ap.add_argument("--memory-limit", type=int, default=2048, help="MiB per run (default 2048)")
+    ap.add_argument("--seed", type=int, default=0, help="htngtp's search seed (default 0)")
     ap.add_argument("--verifier", help="pandaPIparser, run as `PATH --verify DOMAIN PROBLEM PLAN`")
-    ap.add_argument("--processes", type=int, help="local runs at once (default: all cores)")
-    ap.add_argument("--slurm", metavar="PARTITION", help="run on a Slurm grid in this partition")
-    ap.add_argument("--slurm-memory", default="3G", help="memory per Slurm task")
-    ap.add_argument("--slurm-time", default="0", help="time per Slurm task (Slurm's format)")
-    ap.add_argument("--path", help="experiment folder (default: experiments/data/hddl)")
-    args, lab_args = ap.parse_known_args()
-    sys.argv = [sys.argv[0]] + lab_args
+    ap.add_argument("--verifier-time-limit", type=int, default=300,
+                    help="seconds for the verifier on one plan (default 300)")
+    common.add_common_args(ap, "hddl")
+    args = common.parse_args(ap)
 
-    env = (SlurmEnvironment(partition=args.slurm, memory_per_cpu=args.slurm_memory,
-                            time_limit_per_task=args.slurm_time)
-           if args.slurm else LocalEnvironment(processes=args.processes))
-    path = args.path or str(HERE / "data" / "hddl")
-    exp = Experiment(path=path, environment=env)
-    binaries = named(args.binary, {"htngtp": str(ROOT / "target/release/htngtp")})
-    options = named(args.option, {"": ""})
-    exp.add_resource("runner", HERE / "run_htngtp.py")
-    for bname, bpath in binaries.items():
-        bpath = os.path.abspath(bpath)
-        for oname, extra in options.items():
-            algo = "-".join(x for x in (bname, oname) if x)
-            for domain, dfile, pfile in problems(args.suite, args.domain, args.first):
-                run = exp.add_run()
-                cmd = [sys.executable, "{runner}", bpath, str(dfile.resolve()), str(pfile.resolve()),
-                       str(args.time_limit), str(args.memory_limit), str(args.seed),
-                       os.path.abspath(args.verifier) if args.verifier else ""]
-                if extra:
-                    cmd += ["--"] + shlex.split(extra)
-                # Lab's limits sit above htngtp's own, so that htngtp stops first and says why.
-                run.add_command("plan", cmd, time_limit=args.time_limit * 3 + 600,
-                                memory_limit=args.memory_limit + 1024)
-                run.set_property("algorithm", algo)
-                run.set_property("domain", domain)
-                run.set_property("problem", pfile.name)
-                run.set_property("id", [algo, domain, pfile.name])
-    parser = Parser()
-    parser.add_function(parse_result, file="run.log")
-    exp.add_parser(parser)
-    exp.add_step("build", exp.build)
-    exp.add_step("start", exp.start_runs)
-    exp.add_step("parse", exp.parse)
-    exp.add_fetcher(name="fetch")
+    if args.time_limit <= 0 or args.memory_limit <= 0:
+        fail("--time-limit and --memory-limit must be above 0")
+    if args.first is not None and args.first <= 0:
+        fail("--first must be above 0")
+    suite = Path(args.suite)
+    if suite.is_dir():
+        problems = list(folder_problems(suite, args.domain, args.first))
+    elif suite.is_file():
+        problems = list(list_problems(suite, args.domain, args.first))
+    else:
+        fail(f"--suite {args.suite}: no such folder or file")
+    if not problems:
+        fail(f"--suite {args.suite}: no problem selected")
+    verifier = str(common.executable(args.verifier, "--verifier")) if args.verifier else None
+
+    binaries = {n: common.executable(p, f"--binary {n}=")
+                for n, p in common.named(args.binary, "--binary").items()}
+    revisions = common.named(args.revision, "--revision")
+    anchors = common.named(args.anchor, "--anchor")
+    if not binaries and not revisions and not anchors:
+        binaries = {"htngtp": common.executable(ROOT / "target/release/htngtp",
+                                                "the release build (cargo build --release -p htngtp)")}
+    clash = (set(binaries) & set(revisions)) | ((set(binaries) | set(revisions)) & set(anchors))
+    if clash:
+        fail(f"the algorithm name(s) {', '.join(sorted(clash))} are given twice")
+    options = common.named(args.option, "--option", {"": ""})
+    for name, extra in options.items():
+        try:
+            shlex.split(extra)
+        except ValueError as e:
+            fail(f"--option {name}: {e}")
+    exp = common.experiment(args, "hddl")
+    binaries.update(cached_revisions(revisions, args.revision_cache) if revisions else {})
+
+    exp.add_resource("runner", HERE / "run_hddl.py")
+    algorithms = []
+    planners = [("htngtp", f"{b}-{o}" if o else b, str(path), shlex.split(extra))
+                for b, path in binaries.items() for o, extra in options.items()]
+    planners += [("anchor", name, command, []) for name, command in anchors.items()]
+    for kind, algo, planner, extra in planners:
+        algorithms.append(algo)
+        for domain, dfile, pfile, scene in problems:
+            run = exp.add_run()
+            cmd = [sys.executable, "{runner}", kind, planner, str(dfile), str(pfile),
+                   "--time-limit", str(args.time_limit), "--memory-limit", str(args.memory_limit),
+                   "--seed", str(args.seed), "--verifier-time-limit", str(args.verifier_time_limit)]
+            if scene:
+                cmd += ["--scene", str(scene)]
+            if verifier:
+                cmd += ["--verifier", verifier]
+            if extra:
+                cmd += ["--"] + extra
+            # Lab's limits sit above the planner's own (and the verifier's time), so that the
+            # planner stops first and says why.
+            run.add_command("plan", cmd,
+                            time_limit=args.time_limit * 3 + 60 + (args.verifier_time_limit if verifier else 0),
+                            memory_limit=args.memory_limit + 1024)
+            problem = pfile.name if not scene else f"{pfile.name}@{scene.name}"
+            run.set_property("algorithm", algo)
+            run.set_property("domain", domain)
+            run.set_property("problem", problem)
+            run.set_property("id", [algo, domain, problem])
+    if len(set(algorithms)) != len(algorithms):
+        fail("two algorithms have the same name")
+
+    from lab.reports import Attribute, geometric_mean
+
     attributes = [
         Attribute("coverage", absolute=True, min_wins=False),
         Attribute("unsolvable", absolute=True, min_wins=False),
-        Attribute("accepted", absolute=True, min_wins=False),
+        Attribute("limit_time", absolute=True),
+        Attribute("limit_memory", absolute=True),
+        Attribute("verified", absolute=True, min_wins=False),
         Attribute("rejected", absolute=True),
         Attribute("solve_time", function=geometric_mean),
-        Attribute("peak_memory_kb", function=max),
-        "nodes", "plan_length", "limit", "official",
+        Attribute("time", function=geometric_mean),
+        Attribute("wall_time", function=geometric_mean),
+        Attribute("memory", function=max),
+        Attribute("nodes", function=geometric_mean),
+        Attribute("plan_length", function=geometric_mean),
+        "outcome", "limit", "verdict",
     ]
-    exp.add_report(AbsoluteReport(attributes=attributes), outfile="report.html")
+    columns = ["outcome", "coverage", "unsolvable", "limit", "time", "solve_time", "wall_time",
+               "memory", "nodes", "plan_length", "validated", "verdict", "exit_code", "message"]
+    common.add_steps_and_reports(exp, algorithms, attributes, columns, "solve_time", args.compare)
     exp.run_steps()
 
 
 if __name__ == "__main__":
-    main()
+    common.run_main(main)
