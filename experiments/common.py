@@ -7,6 +7,7 @@ import csv
 import json
 import os
 import shutil
+import subprocess
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -230,6 +231,28 @@ def write_tables(eval_dir, columns):
         w.writerow(["domain", "algorithm", "runs", "solved"])
         w.writerows(coverage_rows(props))
     print(f"wrote {out / 'runs.csv'}, {out / 'runs.json'}, {out / 'coverage.csv'}")
+
+
+def cached_revisions(revisions, cache):
+    """NAME -> the htngtp binary of each git revision, built once into the cache."""
+    from lab.cached_revision import CachedRevision
+
+    target = Path(cache) / "cargo-target"
+    build = ["sh", "-c", f"cargo build --release -p htngtp --target-dir '{target}' && "
+             f"cp '{target}/release/htngtp' htngtp"]
+    out = {}
+    for name, rev in revisions.items():
+        known = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet",
+                                f"{rev}^{{commit}}"], capture_output=True)
+        if known.returncode != 0:
+            fail(f"--revision {name}={rev}: not a commit of {ROOT}")
+        cr = CachedRevision(str(cache), str(ROOT), rev, build)
+        cr.cache()
+        binary = cr.path / "htngtp"
+        if not binary.is_file():
+            fail(f"--revision {name}={rev}: the build left no binary at {binary}")
+        out[name] = binary
+    return out
 
 
 def help_formatter():

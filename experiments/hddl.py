@@ -27,7 +27,6 @@ Reports in PATH-eval: report.html (absolute, per domain), compare-A-B.html and s
 coverage.csv (solved per domain and algorithm), properties (Lab's JSON).
 """
 import argparse
-import os
 import shlex
 import sys
 from pathlib import Path
@@ -77,27 +76,6 @@ def list_problems(listfile, domains, first):
             continue
         yield (name, files[0].resolve(), files[1].resolve(),
                files[2].resolve() if len(files) == 3 else None)
-
-
-def cached_revisions(revisions, cache):
-    """NAME -> the htngtp binary of each git revision, built once into the cache."""
-    from lab.cached_revision import CachedRevision
-
-    target = Path(cache) / "cargo-target"
-    build = ["sh", "-c", f"cargo build --release -p htngtp --target-dir '{target}' && "
-             f"cp '{target}/release/htngtp' htngtp"]
-    out = {}
-    for name, rev in revisions.items():
-        if os.system(f"git -C '{ROOT}' rev-parse --verify --quiet '{rev}^{{commit}}' >/dev/null"):
-            fail(f"--revision {name}={rev}: not a commit of {ROOT}")
-        cr = CachedRevision(str(cache), str(ROOT), rev, build,
-                            exclude=["viewer", "docs", "experiments", "python"])
-        cr.cache()
-        binary = cr.path / "htngtp"
-        if not binary.is_file():
-            fail(f"--revision {name}={rev}: the build left no binary at {binary}")
-        out[name] = binary
-    return out
 
 
 def main():
@@ -158,7 +136,7 @@ def main():
         except ValueError as e:
             fail(f"--option {name}: {e}")
     exp = common.experiment(args, "hddl")
-    binaries.update(cached_revisions(revisions, args.revision_cache) if revisions else {})
+    binaries.update(common.cached_revisions(revisions, args.revision_cache) if revisions else {})
 
     exp.add_resource("runner", HERE / "run_hddl.py")
     algorithms = []
