@@ -176,10 +176,17 @@ def slurm(binary):
     lab("hddl.py", ["--suite", str(HERE / "ci-suite.txt"), "--domain", "payment",
                     "--binary", f"htngtp={binary}", "--path", str(path), "--fresh",
                     "--slurm", "ci-partition", "--slurm-memory", "2500M",
-                    "--slurm-time", "0:30:00", "build", "start"], env=env)
-    jobs = sorted((Path(str(path) + "-grid-steps")).glob("*-start"))
+                    "--slurm-time", "0:30:00", "build", "start", "parse"], env=env)
+    grid = Path(str(path) + "-grid-steps")
+    jobs = sorted(grid.glob("*-start"))
     check(len(jobs) == 1, "Slurm: one job file for the start step")
     text = jobs[0].read_text()
+    parse = sorted(grid.glob("*-parse"))
+    check(len(parse) == 1, "Slurm: one job file for the parse step")
+    last = parse[0].read_text().strip().splitlines()[-1]
+    check("ci-suite.txt" in last and "--slurm ci-partition" in last and "--fresh" not in last
+          and last.endswith(" parse"),
+          f"Slurm: the parse step's job runs this script with its options, without --fresh: {last}")
     for line in ("#SBATCH --partition=ci-partition", "#SBATCH --mem-per-cpu=2500M",
                  "#SBATCH --time=0:30:00", "#SBATCH --array=1-2"):
         check(line in text.splitlines(), f"Slurm job file has `{line}`")

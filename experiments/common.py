@@ -6,6 +6,7 @@ import argparse
 import csv
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -99,10 +100,15 @@ def add_common_args(ap, default_name):
 
 def parse_args(ap):
     """Our options, then Lab's step arguments left in sys.argv for Lab's own parser."""
-    args, rest = ap.parse_known_args()
+    argv = sys.argv[1:]
+    args, rest = ap.parse_known_args(argv)
     unknown = [a for a in rest if a.startswith("-") and a != "--all"]
     if unknown:
         ap.error(f"unknown option(s): {' '.join(unknown)}")
+    if rest and argv[len(argv) - len(rest):] != rest:
+        ap.error(f"give Lab's steps ({' '.join(rest)}) after every option")
+    # What a Slurm job of a later step runs this script with (--fresh would remove the runs).
+    args.replay = [a for a in argv[:len(argv) - len(rest)] if a != "--fresh"]
     sys.argv = [sys.argv[0]] + rest
     if args.processes is not None and not 1 <= args.processes <= os.cpu_count():
         fail(f"--processes {args.processes}: this machine has {os.cpu_count()} cores")
@@ -110,6 +116,7 @@ def parse_args(ap):
 
 
 def environment(args):
+    from lab import tools
     from lab.environments import LocalEnvironment, SlurmEnvironment
 
     if not args.slurm:
@@ -125,6 +132,12 @@ def environment(args):
                 header = "\n".join(l for l in header.splitlines()
                                    if not l.startswith("#SBATCH --qos=")) + "\n"
             return header
+
+        def _get_step_job_body(self, step):
+            # Lab's own body runs `python SCRIPT STEP`: this script needs its options too.
+            words = [tools.get_python_executable(), os.path.abspath(sys.argv[0])] + args.replay
+            return (f"cd {shlex.quote(os.getcwd())}\n"
+                    + " ".join(shlex.quote(str(w)) for w in words + [step.name]) + "\n")
 
     if shutil.which("sbatch") is None:
         print("warning: sbatch is not on PATH here; the start step will fail", file=sys.stderr)
