@@ -48,12 +48,23 @@ DEFAULT_TASKS = [
 STRATEGIES = ["symbolic", "chronological", "geometric-first"]
 
 
+def seed_list(text):
+    a, sep, b = text.partition("-")
+    try:
+        lo, hi = int(a), int(b) if sep else int(a)
+    except ValueError:
+        fail(f"--seed {text!r}: expected a number or a range A-B")
+    if lo < 0 or hi < lo:
+        fail(f"--seed {text!r}: expected 0 <= A <= B")
+    return list(range(lo, hi + 1))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=common.help_formatter())
     ap.add_argument("--bench", choices=["library", "gtp", "both"], default="both",
                     help="which runs (default both)")
-    ap.add_argument("--seed", type=int, action="append",
-                    help="a seed (repeatable; default 1)")
+    ap.add_argument("--seed", action="append", metavar="N|A-B",
+                    help="a seed or a range of seeds, A to B (repeatable; default 1)")
     ap.add_argument("--runs", type=int, default=10,
                     help="library runs (scenes) per seed and layout (default 10)")
     ap.add_argument("--layout", action="append", choices=["nudge", "random"],
@@ -79,7 +90,7 @@ def main():
     common.add_common_args(ap, "geometry")
     args = common.parse_args(ap)
 
-    seeds = args.seed or [1]
+    seeds = [n for text in args.seed or ["1"] for n in seed_list(text)]
     if len(set(seeds)) != len(seeds):
         fail("a --seed is given twice")
     if args.runs <= 0 or args.time_limit <= 0:
