@@ -3,18 +3,19 @@
 
 Through Lab's local environment, into target/lab-ci/:
  1. hddl.py on a tiny suite: the first problem of four IPC domains of
-    ../shared/benchmarks/ipc2020-total-order (or $HTNGTP_CI_BENCHMARKS) when it exists, else the project's own
-    files (experiments/ci-suite.txt: two library problems with their scene, three HDDL test
-    problems, one of them proven unsolvable), under two configurations (depth-first, best-first);
+    ../shared/benchmarks/ipc2020-total-order (or $HTNGTP_CI_BENCHMARKS) when it exists, else
+    the project's own files (experiments/ci-suite.txt: two library problems with their scene,
+    three HDDL test problems, one of them proven unsolvable), under two configurations (depth-first, best-first);
     asserts the outcomes and solved counts per domain, the parsed attributes, and the official
     verifier's verdicts when /tmp/pandaPIparser/pandaPIparser (or $HTNGTP_VERIFIER) exists
     (otherwise it says why it skips them, and checks the verdict plumbing with a stand-in
     verifier that runs `htngtp validate`); and that every report is written.
  2. geometry.py: library runs (one nudged scene, one random layout, seed 1, plans checked by
     `htngtp check`) and two GTP tasks alone; asserts success, latency attributes, reports.
- 3. hddl.py with --slurm and a stand-in sbatch: the job file names the partition, memory and
-    time per task.
- 4. Bad input: a missing suite is one line `error: ...` and exit code 2.
+ 3. hddl.py with an anchor planner (htngtp's command line standing in): outcomes, plan lengths.
+ 4. hddl.py with --slurm and a stand-in sbatch: the job file names the partition, memory and
+    time per task, and a later step's job runs the script with its own options.
+ 5. Bad input: a missing suite is one line `error: ...` and exit code 2.
 No assertion is on a time.
 """
 import argparse
@@ -166,6 +167,19 @@ def geometry(binary):
                   f"{name}: grasps, planner_calls")
 
 
+def anchor(binary):
+    """An anchor planner (htngtp itself, as a command line): its plan read from its output."""
+    path = OUT / "anchor"
+    lab("hddl.py", ["--suite", str(HERE / "ci-suite.txt"), "--domain", "payment", "--domain",
+                    "switches", "--anchor", f"stand-in={binary} plan {{domain}} {{problem}}",
+                    "--path", str(path), "--fresh", "--all"])
+    got = {r["problem"]: (r.get("outcome"), r.get("plan_length"))
+           for r in runs_of(Path(str(path) + "-eval"))}
+    want = {"payment-credit-7.hddl": ("solved", 3), "unsolvable.hddl": ("no-plan", None),
+            "switches-24.hddl": ("solved", 24)}
+    check(got == want, f"anchor planner: (outcome, plan_length) per problem {got}")
+
+
 def slurm(binary):
     fake = OUT / "fake-slurm"
     fake.mkdir(parents=True, exist_ok=True)
@@ -214,6 +228,7 @@ def main():
     OUT.mkdir(parents=True)
     official = hddl(binary)
     geometry(binary)
+    anchor(binary)
     slurm(binary)
     bad_input(binary)
     print("experiments: all checks passed" + ("" if official else

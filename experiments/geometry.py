@@ -123,7 +123,8 @@ def main():
         if algo not in algorithms:
             algorithms.append(algo)
         run = exp.add_run()
-        run.add_command("bench", [sys.executable, "{runner}"] + cmd + extra,
+        words = [str(w).replace("{", "{{").replace("}", "}}") for w in cmd + extra]
+        run.add_command("bench", [sys.executable, "{runner}"] + words,
                         time_limit=time_limit, memory_limit=4096)
         run.set_property("algorithm", algo)
         run.set_property("domain", domain)

@@ -78,6 +78,11 @@ def list_problems(listfile, domains, first):
                files[2].resolve() if len(files) == 3 else None)
 
 
+def lab_literal(word):
+    """A command word as Lab passes it on: Lab fills `{name}` with its resources."""
+    return str(word).replace("{", "{{").replace("}", "}}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=common.help_formatter())
     ap.add_argument("--suite", required=True,
@@ -147,15 +152,16 @@ def main():
         algorithms.append(algo)
         for domain, dfile, pfile, scene in problems:
             run = exp.add_run()
-            cmd = [sys.executable, "{runner}", kind, planner, str(dfile), str(pfile),
+            cmd = [sys.executable, "{runner}", kind, lab_literal(planner), lab_literal(dfile),
+                   lab_literal(pfile),
                    "--time-limit", str(args.time_limit), "--memory-limit", str(args.memory_limit),
                    "--seed", str(args.seed), "--verifier-time-limit", str(args.verifier_time_limit)]
             if scene:
-                cmd += ["--scene", str(scene)]
+                cmd += ["--scene", lab_literal(scene)]
             if verifier:
-                cmd += ["--verifier", verifier]
+                cmd += ["--verifier", lab_literal(verifier)]
             if extra:
-                cmd += ["--"] + extra
+                cmd += ["--"] + [lab_literal(w) for w in extra]
             # Lab's limits sit above the planner's own (and the verifier's time), so that the
             # planner stops first and says why.
             run.add_command("plan", cmd,
