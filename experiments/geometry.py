@@ -3,8 +3,9 @@
 (`htngtp bench library`, scenes nudged or random layouts) and GTP tasks alone (`htngtp gtp`),
 one Lab run per seed and scene, with success and latency parsed.
 
-  python experiments/geometry.py --seed 1 --runs 100 --fresh --all            # Table II, Lab
-  python experiments/geometry.py --layout random --seed 1 --runs 100 --check --fresh --all
+  target/labenv/bin/python experiments/geometry.py --seed 1 --runs 100 --fresh --all   # Table II
+  target/labenv/bin/python experiments/geometry.py --layout random --seed 1 --runs 100 \\
+      --check --fresh --all
 
 Library runs: for each --seed S and index I below --runs N, run I of `htngtp bench library
 --runs N --seed S` (`--only I`: the same randomized scene and search seeds as in the full

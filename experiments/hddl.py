@@ -2,7 +2,7 @@
 """htngtp on an HDDL suite through Downward Lab: one run per algorithm and problem, the
 official verifier on each plan when given, reports per domain.
 
-  python experiments/hddl.py --suite ../shared/benchmarks/ipc2020-total-order \\
+  target/labenv/bin/python experiments/hddl.py --suite ../shared/benchmarks/ipc2020-total-order \\
       --verifier /tmp/pandaPIparser/pandaPIparser --fresh --all
 
 The suite is an IPC-style folder (one folder per domain; `domain.hddl`, or `P-domain.hddl`
