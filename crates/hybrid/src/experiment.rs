@@ -15,8 +15,9 @@ use parry3d::query::intersection_test;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::oracle::RequestTime;
 use crate::oracle::TaskStats;
-use crate::random_layout::{LayoutSummary, RandomLayouts};
+use crate::random_layout::{Layout, LayoutSummary};
 use crate::run::{RunOptions, plan};
 
 /// How much the initial scene is perturbed per run.
@@ -110,9 +111,20 @@ pub struct RunRecord {
     /// that stopped it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cause: Option<FailureCause>,
-    /// The random layout the run planned in (`--layout random`).
+    /// The random layout the run planned in (`--layout random`, `--layout room`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub layout: Option<LayoutSummary>,
+    /// Every GTP solution request of the run, timed.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub requests: Vec<RequestTime>,
+}
+
+/// What makes a run's scene from its seed: a random layout of a scene
+/// ([`crate::random_layout::RandomLayouts`]) or a random room
+/// ([`crate::room_layout::RandomRooms`]).
+pub trait LayoutSource: Send + Sync + std::fmt::Debug {
+    /// The scene of `seed`, or why there is none.
+    fn generate(&self, seed: u64) -> Result<Layout, String>;
 }
 
 /// Why a run found no plan: the last GTP task that found no (further) solution, its
@@ -143,6 +155,7 @@ impl RunRecord {
             plan_file_error: None,
             cause: None,
             layout: None,
+            requests: Vec::new(),
             index,
             seed,
             solved: false,
@@ -247,7 +260,7 @@ pub struct ExperimentOptions {
     pub plans: Option<std::path::PathBuf>,
     /// Plan each run in a random layout of the scene instead of a nudged copy (`--layout
     /// random`; the scene `world` is then unused).
-    pub layouts: Option<Arc<RandomLayouts>>,
+    pub layouts: Option<Arc<dyn LayoutSource>>,
     /// Write each run's random layout here (`layout-{index:03}.toml`), to plan it again.
     pub save_scenes: Option<std::path::PathBuf>,
 }
@@ -273,7 +286,7 @@ pub fn run_experiment(
         .map(|i| {
             let seed = options.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
             let (scene, layout) = match &options.layouts {
-                Some(layouts) => match laid_out(layouts, options, i, seed) {
+                Some(layouts) => match laid_out(layouts.as_ref(), options, i, seed) {
                     Ok((w, summary)) => (w, Some(summary)),
                     Err(e) => {
                         progress();
@@ -308,7 +321,7 @@ pub fn run_experiment(
 
 /// The random layout of run `index` (seed `seed`), written to `options.save_scenes` when set.
 fn laid_out(
-    layouts: &RandomLayouts,
+    layouts: &dyn LayoutSource,
     options: &ExperimentOptions,
     index: usize,
     seed: u64,
@@ -317,7 +330,7 @@ fn laid_out(
     if let Some(dir) = &options.save_scenes {
         let path = dir.join(format!("layout-{index:03}.toml"));
         let text = format!(
-            "# bench library --layout random: run {index}, seed {seed}.\n# {}\n{}",
+            "# bench library --layout random or room: run {index}, seed {seed}.\n# {}\n{}",
             layout.summary.line(),
             layout.toml
         );
@@ -377,6 +390,7 @@ pub fn run_one(
                 plan_file_error,
                 cause,
                 layout: None,
+                requests: run.oracle.requests().to_vec(),
                 index,
                 seed,
                 solved,

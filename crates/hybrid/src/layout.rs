@@ -105,37 +105,78 @@ impl SceneText {
     pub fn add(&mut self, object: &NewObject) -> Result<(), String> {
         let mut o = toml::Table::new();
         o.insert("name".into(), toml::Value::String(object.name.clone()));
-        let mut shape = toml::Table::new();
-        match object.shape {
-            NewShape::Box(h) => {
-                shape.insert("box".into(), floats(&h));
-            }
-            NewShape::Cylinder {
-                radius,
-                half_height,
-            } => {
-                let mut c = toml::Table::new();
-                c.insert("radius".into(), toml::Value::Float(f64::from(radius)));
-                c.insert(
-                    "half_height".into(),
-                    toml::Value::Float(f64::from(half_height)),
-                );
-                shape.insert("cylinder".into(), toml::Value::Table(c));
-            }
-        }
-        o.insert("shape".into(), toml::Value::Table(shape));
-        let mut pose = toml::Table::new();
-        pose.insert("xyz".into(), floats(&object.xyz));
-        pose.insert("rpy".into(), floats(&object.rpy));
-        o.insert("pose".into(), toml::Value::Table(pose));
-        let colour = object
-            .colour
-            .iter()
-            .map(|&c| toml::Value::Integer(i64::from(c)))
-            .collect();
-        o.insert("colour".into(), toml::Value::Array(colour));
+        o.insert("shape".into(), object.shape.to_toml());
+        o.insert("pose".into(), pose_table(object.xyz, object.rpy));
+        o.insert("colour".into(), colour(object.colour));
         o.insert("movable".into(), toml::Value::Boolean(object.movable));
         self.objects_mut()?.push(toml::Value::Table(o));
+        Ok(())
+    }
+
+    /// Adds the fixed piece of furniture `f` (its parts, its support surfaces).
+    pub fn add_furniture(&mut self, f: &NewFurniture) -> Result<(), String> {
+        let mut o = toml::Table::new();
+        o.insert("name".into(), toml::Value::String(f.name.clone()));
+        o.insert("colour".into(), colour(f.colour));
+        o.insert(
+            "pose".into(),
+            pose_table([f.xy[0], f.xy[1], 0.0], [0.0, 0.0, f.yaw_deg]),
+        );
+        let parts = f
+            .parts
+            .iter()
+            .map(|(shape, xyz)| {
+                let mut p = toml::Table::new();
+                p.insert("shape".into(), shape.to_toml());
+                p.insert("pose".into(), pose_table(*xyz, [0.0; 3]));
+                toml::Value::Table(p)
+            })
+            .collect();
+        o.insert("parts".into(), toml::Value::Array(parts));
+        if !f.surfaces.is_empty() {
+            o.insert("support".into(), toml::Value::Boolean(true));
+            let surfaces = f
+                .surfaces
+                .iter()
+                .map(|(centre, half)| {
+                    let mut s = toml::Table::new();
+                    s.insert("centre".into(), floats(centre));
+                    s.insert("half_extents".into(), floats(half));
+                    toml::Value::Table(s)
+                })
+                .collect();
+            o.insert("surfaces".into(), toml::Value::Array(surfaces));
+        }
+        self.objects_mut()?.push(toml::Value::Table(o));
+        Ok(())
+    }
+
+    /// The names of the fixed objects (furniture).
+    pub fn fixed_objects(&self) -> Vec<String> {
+        self.table
+            .get("objects")
+            .and_then(toml::Value::as_array)
+            .into_iter()
+            .flatten()
+            .filter_map(toml::Value::as_table)
+            .filter(|o| o.get("movable").and_then(toml::Value::as_bool) != Some(true))
+            .filter_map(|o| o.get("name").and_then(toml::Value::as_str))
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// Sets the scene's `[scene] bounds` (the region of the mightability maps).
+    pub fn set_bounds(&mut self, min: [f32; 3], max: [f32; 3]) -> Result<(), String> {
+        let scene = self
+            .table
+            .entry("scene")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or("[scene] is not a table")?;
+        let mut b = toml::Table::new();
+        b.insert("min".into(), floats(&min));
+        b.insert("max".into(), floats(&max));
+        scene.insert("bounds".into(), toml::Value::Table(b));
         Ok(())
     }
 
@@ -231,6 +272,60 @@ impl SceneText {
     }
 }
 
+/// A new fixed piece of furniture of a generated scene: parts (boxes and cylinders placed in its
+/// frame, upright), standing on the floor at `xy` turned by `yaw_deg`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewFurniture {
+    pub name: String,
+    pub xy: [f32; 2],
+    pub yaw_deg: f32,
+    /// Each part's shape and centre in the furniture's frame.
+    pub parts: Vec<(NewShape, [f32; 3])>,
+    /// Support rectangles in its frame: centre and half extents (none: not a support).
+    pub surfaces: Vec<([f32; 3], [f32; 2])>,
+    pub colour: [u8; 3],
+}
+
+impl NewShape {
+    /// The scene format's `shape` table.
+    fn to_toml(self) -> toml::Value {
+        let mut shape = toml::Table::new();
+        match self {
+            NewShape::Box(h) => {
+                shape.insert("box".into(), floats(&h));
+            }
+            NewShape::Cylinder {
+                radius,
+                half_height,
+            } => {
+                let mut c = toml::Table::new();
+                c.insert("radius".into(), toml::Value::Float(f64::from(radius)));
+                c.insert(
+                    "half_height".into(),
+                    toml::Value::Float(f64::from(half_height)),
+                );
+                shape.insert("cylinder".into(), toml::Value::Table(c));
+            }
+        }
+        toml::Value::Table(shape)
+    }
+}
+
+fn pose_table(xyz: [f32; 3], rpy: [f32; 3]) -> toml::Value {
+    let mut pose = toml::Table::new();
+    pose.insert("xyz".into(), floats(&xyz));
+    pose.insert("rpy".into(), floats(&rpy));
+    toml::Value::Table(pose)
+}
+
+fn colour(c: [u8; 3]) -> toml::Value {
+    toml::Value::Array(
+        c.iter()
+            .map(|&c| toml::Value::Integer(i64::from(c)))
+            .collect(),
+    )
+}
+
 fn floats(v: &[f32]) -> toml::Value {
     toml::Value::Array(
         v.iter()
@@ -254,14 +349,63 @@ fn xyz_of(pose: &toml::Table) -> Result<[f32; 3], String> {
     Ok(out)
 }
 
-/// A support surface of a world, in world coordinates (the support's rotation about the
-/// vertical is ignored: the library's furniture stands square to the axes).
+/// A support surface of a world, in world coordinates: a rectangle turned by its support's
+/// yaw (furniture stands upright; a tilt is ignored).
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
     pub support: ObjectId,
     /// Centre of the rectangle, world frame (z: its height).
     pub centre: Vector,
     pub half_extents: [f32; 2],
+    /// The rectangle's turn about the vertical (radians): its first half extent lies along
+    /// `(cos yaw, sin yaw)`.
+    pub yaw: f32,
+}
+
+impl Surface {
+    /// The world point of the surface's local `(u, v)` (along its half extents), `dz` above it.
+    pub fn at(&self, u: f32, v: f32, dz: f32) -> Vector {
+        let (s, c) = self.yaw.sin_cos();
+        self.centre + Vector::new(c * u - s * v, s * u + c * v, dz)
+    }
+
+    /// The half extents, along the surface's own axes, of the rectangle that holds a world
+    /// x-y rectangle of half sizes `half` (an object's footprint as its bounding box has it).
+    pub fn local_half(&self, half: [f32; 2]) -> [f32; 2] {
+        let (s, c) = self.yaw.sin_cos();
+        let (s, c) = (s.abs(), c.abs());
+        [c * half[0] + s * half[1], s * half[0] + c * half[1]]
+    }
+
+    /// A point of the rectangle's edge and the outward normal there (world frame, z 0), for
+    /// `t` in `[0, 1)` along its perimeter (the sides weighted by their length).
+    pub fn edge_point(&self, t: f32) -> (Vector, Vector) {
+        let [hx, hy] = self.half_extents;
+        let t = t.clamp(0.0, 1.0) * 4.0 * (hx + hy);
+        let along = |u: f32, h: f32| -h + (u / (2.0 * h)).min(1.0) * 2.0 * h;
+        let (u, v, out) = if t < 2.0 * hx {
+            (along(t, hx), hy, [0.0, 1.0])
+        } else if t < 4.0 * hx {
+            (along(t - 2.0 * hx, hx), -hy, [0.0, -1.0])
+        } else if t < 4.0 * hx + 2.0 * hy {
+            (hx, along(t - 4.0 * hx, hy), [1.0, 0.0])
+        } else {
+            (-hx, along(t - 4.0 * hx - 2.0 * hy, hy), [-1.0, 0.0])
+        };
+        let p = self.at(u, v, 0.0);
+        let n = self.at(out[0], out[1], 0.0) - self.centre;
+        (Vector::new(p.x, p.y, 0.0), Vector::new(n.x, n.y, 0.0))
+    }
+
+    /// The world points of a grid `step` apart over the surface, `dz` above it.
+    pub fn grid(&self, step: f32, dz: f32) -> Vec<Vector> {
+        let [hx, hy] = self.half_extents;
+        let (nx, ny) = ((hx / step) as i32, (hy / step) as i32);
+        (-nx..=nx)
+            .flat_map(|i| (-ny..=ny).map(move |j| (i, j)))
+            .map(|(i, j)| self.at(i as f32 * step, j as f32 * step, dz))
+            .collect()
+    }
 }
 
 /// Every support surface of `world`'s fixed objects.
@@ -271,10 +415,12 @@ pub fn surfaces(world: &World) -> Vec<Surface> {
         .filter(|&id| !world.object(id).movable)
         .flat_map(|id| {
             let pose = world.object_pose(id);
+            let (yaw, _, _) = pose.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
             world.object(id).surfaces.iter().map(move |s| Surface {
                 support: id,
                 centre: pose * s.centre,
                 half_extents: s.half_extents,
+                yaw,
             })
         })
         .collect()
@@ -325,8 +471,9 @@ impl Footprints {
         })
     }
 
-    /// A random free spot for a rectangle of half sizes `half` on surface `s` (inside it by
-    /// `margin`), `clear` from every footprint; `None` after `tries` draws.
+    /// A random free spot for a world x-y rectangle of half sizes `half` on surface `s` (inside
+    /// it by `margin`, the surface turned as it is), `clear` from every footprint; `None` after
+    /// `tries` draws.
     pub fn draw(
         &self,
         s: &Surface,
@@ -336,18 +483,19 @@ impl Footprints {
         tries: usize,
         rng: &mut fastrand::Rng,
     ) -> Option<Vector> {
+        let local = s.local_half(half);
         let room = [
-            s.half_extents[0] - half[0] - margin,
-            s.half_extents[1] - half[1] - margin,
+            s.half_extents[0] - local[0] - margin,
+            s.half_extents[1] - local[1] - margin,
         ];
         if room[0] < 0.0 || room[1] < 0.0 {
             return None;
         }
         (0..tries).find_map(|_| {
-            let c = Vector::new(
-                s.centre.x + (rng.f32() * 2.0 - 1.0) * room[0],
-                s.centre.y + (rng.f32() * 2.0 - 1.0) * room[1],
-                s.centre.z,
+            let c = s.at(
+                (rng.f32() * 2.0 - 1.0) * room[0],
+                (rng.f32() * 2.0 - 1.0) * room[1],
+                0.0,
             );
             self.is_free(s, c, half, clear).then_some(c)
         })

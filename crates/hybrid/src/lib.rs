@@ -6,7 +6,7 @@
 //! ([`htn::planner::Strategy`]), the oracle owns the stack of geometric worlds. [`plan`] and
 //! [`plan_files`] run a whole request, [`export::plan_json`] writes the plan JSON
 //! (`docs/plan-json.md`) with timed trajectories ([`timing`]); [`experiment`], [`scale`],
-//! [`layout`] and [`random_layout`] are the benchmarks of `htngtp bench`.
+//! [`layout`], [`random_layout`] and [`room_layout`] are the benchmarks of `htngtp bench`.
 //!
 //! # Example
 //!
@@ -51,6 +51,7 @@ pub mod export;
 pub mod layout;
 pub mod oracle;
 pub mod random_layout;
+pub mod room_layout;
 pub mod run;
 pub mod scale;
 pub mod timing;

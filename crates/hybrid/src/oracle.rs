@@ -93,6 +93,24 @@ impl TaskStats {
     }
 }
 
+/// One solution request to the GTP, timed: what `bench library --json` reports latencies of.
+#[derive(Clone, Debug, Serialize)]
+pub struct RequestTime {
+    /// The geometric task as the domain names it, and its arguments.
+    pub task: String,
+    pub args: Vec<String>,
+    /// Whether it produced a solution.
+    pub solved: bool,
+    /// The stage (constraint) that stopped the stream, for a request that found nothing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<String>,
+    /// The shared literals of its solution's world, seconds (not in `search.time_s`).
+    pub facts_time_s: f64,
+    /// The GTP's statistics of this request (`time_s`: its latency).
+    #[serde(flatten)]
+    pub search: Stats,
+}
+
 /// A world of the stack with its shared literals.
 #[derive(Clone)]
 struct Frame {
@@ -151,6 +169,8 @@ pub struct GtpOracle {
     streams: HashMap<u64, Stream>,
     next_stream: u64,
     stats: HashMap<String, TaskStats>,
+    /// Every solution request, in order.
+    requests: Vec<RequestTime>,
     /// The last request that found no solution.
     last_failure: Option<TaskFailure>,
     /// The HTN search's deadline, passed to every GTP call.
@@ -179,6 +199,7 @@ impl GtpOracle {
             streams: HashMap::new(),
             next_stream: 0,
             stats: HashMap::new(),
+            requests: Vec::new(),
             last_failure: None,
             deadline: None,
         };
@@ -230,6 +251,11 @@ impl GtpOracle {
     /// Table II figures per geometric task.
     pub fn task_stats(&self) -> &HashMap<String, TaskStats> {
         &self.stats
+    }
+
+    /// Every solution request so far, in order, with its time.
+    pub fn requests(&self) -> &[RequestTime] {
+        &self.requests
     }
 
     /// The symbolic shared literals of `world`.
@@ -358,8 +384,19 @@ impl GeometricOracle for GtpOracle {
                 Some(GeoSolution { add, delete, id })
             }
         };
+        let facts_time_s = t0.elapsed().as_secs_f64();
+        self.requests.push(RequestTime {
+            task: task.clone(),
+            args: args.clone(),
+            solved: result.is_some(),
+            stage: stage
+                .filter(|_| result.is_none())
+                .map(|s| s.name().to_string()),
+            facts_time_s,
+            search: delta,
+        });
         let s = self.stats.entry(task.clone()).or_default();
-        s.record(&delta, result.is_some(), t0.elapsed().as_secs_f64());
+        s.record(&delta, result.is_some(), facts_time_s);
         if self.config.trace {
             let lists = result
                 .as_ref()

@@ -56,9 +56,9 @@ pub const SHARED_PATCH_POINTS: usize = 25;
 /// points at best, over 400 standing places drawn): a strip about 10 x 20 cm.
 pub const STANDING_PATCH_POINTS: usize = 8;
 /// An object's footprint is this far inside its surface's edge (metres).
-const EDGE_MARGIN: f32 = 0.01;
+pub(crate) const EDGE_MARGIN: f32 = 0.01;
 /// Clearance between footprints on a surface (metres).
-const CLEARANCE: f32 = 0.02;
+pub(crate) const CLEARANCE: f32 = 0.02;
 /// A person keeps this far from the robot's body and the furniture (metres).
 const PERSON_CLEARANCE: f32 = 0.05;
 /// Base poses `navigate-to` must each let the robot pick an object the domain drives to.
@@ -106,9 +106,32 @@ pub struct PersonPlacement {
     pub base: [f32; 3],
 }
 
-/// What a layout is, in short (for reports).
+/// Where a random room put a piece of furniture (`--layout room`).
 #[derive(Clone, Debug, Serialize)]
+pub struct FurniturePlacement {
+    pub name: String,
+    /// `desk`, `counter`, `reading-table`, `side-table`, `bookshelf`, `cart` or `chair`.
+    pub kind: &'static str,
+    /// Centre on the floor (metres) and yaw (degrees).
+    pub base: [f32; 3],
+    /// Half sizes of its footprint along its own axes (metres).
+    pub half_extents: [f32; 2],
+    /// Height of its top support surface (metres; 0 for a chair).
+    pub top: f32,
+}
+
+/// What a layout is, in short (for reports).
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct LayoutSummary {
+    /// The furniture of a random room (empty for a layout of the scene's own furniture).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub furniture: Vec<FurniturePlacement>,
+    /// The robot's station in a random room: base x, y (metres) and yaw (degrees).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub station: Option<[f32; 3]>,
+    /// Fixed clutter objects of a random room (books on shelves, things on tops).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub clutter: Vec<ObjectPlacement>,
     pub objects: Vec<ObjectPlacement>,
     pub people: Vec<PersonPlacement>,
     /// Whole-layout attempts it took (1: the first).
@@ -131,7 +154,23 @@ impl LayoutSummary {
                 format!("{} {posture}", p.name)
             })
             .collect();
-        format!("{}; {}", objects.join(", "), people.join(", "))
+        let line = format!("{}; {}", objects.join(", "), people.join(", "));
+        if self.furniture.is_empty() {
+            return line;
+        }
+        let furniture: Vec<String> = self
+            .furniture
+            .iter()
+            .map(|f| match f.kind {
+                "chair" => f.name.clone(),
+                _ => format!("{} ({} {:.2} m)", f.name, f.kind, f.top),
+            })
+            .collect();
+        format!(
+            "{}; {} clutter; {line}",
+            furniture.join(", "),
+            self.clutter.len()
+        )
     }
 }
 
@@ -140,6 +179,12 @@ pub struct Layout {
     pub world: World,
     pub toml: String,
     pub summary: LayoutSummary,
+}
+
+impl crate::experiment::LayoutSource for RandomLayouts {
+    fn generate(&self, seed: u64) -> Result<Layout, String> {
+        RandomLayouts::generate(self, seed)
+    }
 }
 
 /// The generator of one scene's random layouts.
@@ -163,7 +208,7 @@ impl std::fmt::Debug for RandomLayouts {
 
 /// The faces a box may rest on: name and the turn (roll, pitch; radians) that puts it there,
 /// ordered as the scene's books stand (on the long edge) first.
-const BOX_FACES: [(&str, [f32; 2]); 3] = [
+pub(crate) const BOX_FACES: [(&str, [f32; 2]); 3] = [
     ("edge", [0.0, std::f32::consts::FRAC_PI_2]),
     ("end", [std::f32::consts::FRAC_PI_2, 0.0]),
     ("flat", [0.0, 0.0]),
@@ -241,182 +286,21 @@ impl RandomLayouts {
                 people.push(self.place_person(&mut w, &mut text, person, rng)?);
             }
         }
-        let mut placed: BTreeMap<usize, ObjectPlacement> = BTreeMap::new();
-        for &id in &objects {
-            placed.insert(id.0, self.place_object(&mut w, id, rng)?);
-        }
-        for round in 0..PICK_ROUNDS {
-            let failed: Vec<(ObjectId, String)> = objects
-                .iter()
-                .filter_map(|&id| self.picks(&w, id, seed).err().map(|e| (id, e)))
-                .collect();
-            let Some((_, why)) = failed.first() else {
-                break;
-            };
-            if round + 1 == PICK_ROUNDS {
-                return Err(why.clone());
-            }
-            for (k, &(id, _)) in failed.iter().enumerate() {
-                park(&mut w, id, k);
-            }
-            for &(id, _) in &failed {
-                placed.insert(id.0, self.place_object(&mut w, id, rng)?);
-            }
-        }
-        let mut summary_objects = Vec::new();
-        for &id in &objects {
-            text.set_object_pose(&w.object(id).name, w.object_pose(id))?;
-            if let Some(p) = placed.remove(&id.0) {
-                summary_objects.push(p);
-            }
-        }
+        let placer = Placer {
+            start: &self.world,
+            rules: &self.rules,
+            planner: &self.planner,
+        };
+        let summary_objects = placer.place_all(&mut w, &mut text, &objects, rng, seed)?;
         Ok((
             text,
             LayoutSummary {
                 objects: summary_objects,
                 people,
                 attempts: 0,
+                ..LayoutSummary::default()
             },
         ))
-    }
-
-    /// Puts `id` on a random free spot of a random support surface (see the module docs).
-    fn place_object(
-        &self,
-        w: &mut World,
-        id: ObjectId,
-        rng: &mut fastrand::Rng,
-    ) -> Result<ObjectPlacement, String> {
-        let name = w.object(id).name.clone();
-        let all = surfaces(w);
-        if all.is_empty() {
-            return Err("the scene has no support surface".into());
-        }
-        let faces: &[(&str, [f32; 2])] = match w.object(id).kind {
-            geometry::scene::ShapeKind::Box { half_extents } if book_like(half_extents) => {
-                &BOX_FACES
-            }
-            _ => &[("as-in-scene", [0.0, 0.0])],
-        };
-        let start = self.world.object_pose(id).rotation;
-        let robot = robot_of(w)?;
-        let level = if self.rules.driven_to.contains(&name) {
-            geometry::effort::MAX_EFFORT
-        } else {
-            1
-        };
-        let params = FactParams {
-            max_effort: level,
-            ..FactParams::default()
-        };
-        for _ in 0..OBJECT_DRAWS {
-            let s = all[rng.usize(..all.len())];
-            let (face, [roll, pitch]) = faces[rng.usize(..faces.len())];
-            let yaw = rng.f32() * std::f32::consts::TAU;
-            let rotation = if face == "as-in-scene" {
-                parry3d::math::Rotation::from_rotation_z(yaw) * start
-            } else {
-                pose_from_xyz_rpy([0.0; 3], [roll, pitch, yaw]).rotation
-            };
-            w.set_object_pose(id, Pose::from_parts(Vector::ZERO, rotation));
-            let local = w.object_aabb(id);
-            let half = [local.half_extents().x, local.half_extents().y];
-            park(w, id, 0);
-            let taken = Footprints::of(w);
-            let Some(spot) = taken.draw(&s, half, EDGE_MARGIN, CLEARANCE, 1, rng) else {
-                continue;
-            };
-            let c = local.center();
-            let at = Vector::new(spot.x - c.x, spot.y - c.y, s.centre.z - local.mins.z + 2e-4);
-            w.set_object_pose(id, Pose::from_parts(at, rotation));
-            if !self.rests_free(w, id, &s) {
-                continue;
-            }
-            if reachable_effort(w, robot, id, &params).is_none() {
-                continue;
-            }
-            return Ok(ObjectPlacement {
-                name,
-                support: w.object(s.support).name.clone(),
-                face,
-                xyz: [at.x, at.y, at.z],
-                yaw_deg: yaw.to_degrees(),
-            });
-        }
-        park(w, id, 0);
-        Err(format!("no free spot for `{name}` in {OBJECT_DRAWS} draws"))
-    }
-
-    /// Whether `id` touches nothing but its surface's support, and rests on it.
-    fn rests_free(&self, w: &World, id: ObjectId, s: &Surface) -> bool {
-        let shape = &w.object(id).shape;
-        let pose = w.object_shape_pose(id);
-        let free = w.bodies().iter().all(|b| match b.owner {
-            BodyOwner::Object(o) if o == id => true,
-            // Resting on its surface, not into the support's other parts (a shelf's boards).
-            BodyOwner::Object(o) if o == s.support => {
-                parry3d::query::contact(&pose, shape.as_ref(), &b.pose, b.shape.as_ref(), 0.0)
-                    .ok()
-                    .flatten()
-                    .is_none_or(|c| -c.dist <= geometry::world::CONTACT_TOLERANCE_M)
-            }
-            BodyOwner::Object(_) => {
-                parry3d::query::intersection_test(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())
-                    .is_ok_and(|i| !i.intersecting)
-            }
-            BodyOwner::Agent(..) => {
-                parry3d::query::distance(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())
-                    .is_ok_and(|d| d.distance >= CLEARANCE)
-            }
-        });
-        free && on(w, id, s.support, 0.01)
-    }
-
-    /// Whether the robot picks `id` up in `w`: from its station, or (objects the domain drives
-    /// to) from each of the first [`NAVIGATE_POSES`] base poses `navigate-to` finds (the one a
-    /// plan drives to depends on its seed). The base stays where it is (`robot-effort` 1): a
-    /// pick that needs a base move is not what the layout promises.
-    fn picks(&self, w: &World, id: ObjectId, seed: u64) -> Result<(), String> {
-        let name = w.object(id).name.clone();
-        let options = CallOptions {
-            seed,
-            constraints: vec![("robot-effort".into(), "1".into())],
-            deadline: Some(Instant::now() + CHECK_LIMIT),
-        };
-        let pick = |from: &World| -> Result<(), String> {
-            let mut s = self
-                .planner
-                .run(from, "pick", &[&name], &options)
-                .map_err(|e| e.to_string())?;
-            match s.next() {
-                Some(_) => Ok(()),
-                None => Err(s
-                    .failure()
-                    .map(|f| f.to_string())
-                    .unwrap_or_else(|| "no grasp".into())),
-            }
-        };
-        let why = match pick(w) {
-            Ok(()) => return Ok(()),
-            Err(e) => e,
-        };
-        if self.rules.driven_to.contains(&name) {
-            let stream = self
-                .planner
-                .run(w, "navigate-to", &[&name], &options)
-                .map_err(|e| e.to_string())?;
-            let poses: Vec<World> = stream.take(NAVIGATE_POSES).map(|s| s.world).collect();
-            if poses.is_empty() {
-                return Err(format!(
-                    "the robot drives nowhere `{name}` is in reach: {why}"
-                ));
-            }
-            return poses.iter().try_for_each(|from| {
-                pick(from)
-                    .map_err(|e| format!("after driving, the robot cannot pick `{name}`: {e}"))
-            });
-        }
-        Err(format!("the robot cannot pick `{name}` up: {why}"))
     }
 
     /// Seats `person` on their chair moved along the counter, or stands them on free floor
@@ -526,83 +410,290 @@ impl RandomLayouts {
         q: &[f32],
         rng: &mut fastrand::Rng,
     ) -> [f32; 3] {
-        let c = counter.centre;
-        let [hx, hy] = counter.half_extents;
         // A point of the edge (sides weighted by length) and the outward normal there.
-        let t = rng.f32() * 4.0 * (hx + hy);
-        let along = |u: f32, h: f32| -h + (u / (2.0 * h)).min(1.0) * 2.0 * h;
-        let (edge, out) = if t < 2.0 * hx {
-            (Vector::new(along(t, hx), hy, 0.0), Vector::Y)
-        } else if t < 4.0 * hx {
-            (Vector::new(along(t - 2.0 * hx, hx), -hy, 0.0), -Vector::Y)
-        } else if t < 4.0 * hx + 2.0 * hy {
-            (Vector::new(hx, along(t - 4.0 * hx, hy), 0.0), Vector::X)
-        } else {
-            (
-                Vector::new(-hx, along(t - 4.0 * hx - 2.0 * hy, hy), 0.0),
-                -Vector::X,
-            )
-        };
-        let at = Vector::new(c.x, c.y, 0.0) + edge + out * (0.2 + rng.f32() * 0.3);
+        let (edge, out) = counter.edge_point(rng.f32());
+        let at = edge + out * (0.2 + rng.f32() * 0.3);
         let yaw = (-out.y).atan2(-out.x) + (rng.f32() * 2.0 - 1.0) * 20f32.to_radians();
-        let mut standing = q.to_vec();
-        for (dof, value) in w.agent(person).model.posture("standing") {
-            standing[dof] = value;
-        }
-        let base = base_pose(at.x, at.y, yaw);
-        w.set_agent_config(person, base, &standing);
-        base_xyyaw(base)
+        stand_at(w, person, q, [at.x, at.y, yaw])
     }
 
     /// Whether the person's body keeps clear of every object (their chair aside), the robot
     /// and the scene's bounds.
     fn person_is_free(&self, w: &World, person: AgentId, chair: Option<ObjectId>) -> bool {
-        let bodies = w.bodies();
-        let theirs: Vec<_> = bodies
-            .iter()
-            .filter(|b| matches!(b.owner, BodyOwner::Agent(a, _) if a == person))
-            .collect();
-        let bounds = w.scene().bounds.unwrap_or_else(|| self.world.bounds());
-        let inside = theirs.iter().all(|b| {
-            let bb = b.shape.compute_aabb(&b.pose);
-            bb.mins.x >= bounds.mins.x
-                && bb.mins.y >= bounds.mins.y
-                && bb.maxs.x <= bounds.maxs.x
-                && bb.maxs.y <= bounds.maxs.y
-        });
-        inside
-            && bodies.iter().all(|other| {
-                let gap = match other.owner {
-                    BodyOwner::Agent(a, _) if a == person => return true,
-                    BodyOwner::Object(o) if Some(o) == chair => return true,
-                    BodyOwner::Object(o) if w.object(o).movable => return true,
-                    // Seated, the knees go under the counter: touching nothing is enough.
-                    BodyOwner::Object(_) if chair.is_some() => 0.0,
-                    _ => PERSON_CLEARANCE,
-                };
-                theirs.iter().all(|b| {
-                    parry3d::query::distance(
-                        &b.pose,
-                        b.shape.as_ref(),
-                        &other.pose,
-                        other.shape.as_ref(),
-                    )
-                    .is_ok_and(|d| d.distance > gap)
-                })
-            })
+        person_is_free(w, person, chair, self.world.bounds())
     }
 
-    /// Whether the person and the robot (from its station) both reach at least
-    /// [`SHARED_PATCH_POINTS`] points of the counter's top, 5 cm apart, at effort level 1
-    /// ([`STANDING_PATCH_POINTS`] when the person stands).
+    /// Whether the person and the robot share a patch of the counter (see [`serves`]).
     fn serves(&self, w: &World, person: AgentId, counter: &Surface, sitting: bool) -> bool {
-        let needed = if sitting {
-            SHARED_PATCH_POINTS
-        } else {
-            STANDING_PATCH_POINTS
-        };
-        shared_points(w, person, counter) >= needed
+        serves(w, person, counter, sitting)
     }
+}
+
+/// Stands `person` (the SRDF's `standing` posture over `q`) at base `(x, y, yaw in radians)`;
+/// returns the base as the scene format writes it.
+pub(crate) fn stand_at(w: &mut World, person: AgentId, q: &[f32], at: [f32; 3]) -> [f32; 3] {
+    let mut standing = q.to_vec();
+    for (dof, value) in w.agent(person).model.posture("standing") {
+        standing[dof] = value;
+    }
+    let base = base_pose(at[0], at[1], at[2]);
+    w.set_agent_config(person, base, &standing);
+    base_xyyaw(base)
+}
+
+/// Whether the person's body keeps clear of every object (their chair aside, the movable
+/// ones too), [`PERSON_CLEARANCE`] from the furniture when standing, the robot, and the
+/// scene's bounds (`fallback` when the scene names none).
+pub(crate) fn person_is_free(
+    w: &World,
+    person: AgentId,
+    chair: Option<ObjectId>,
+    fallback: parry3d::bounding_volume::Aabb,
+) -> bool {
+    let bodies = w.bodies();
+    let theirs: Vec<_> = bodies
+        .iter()
+        .filter(|b| matches!(b.owner, BodyOwner::Agent(a, _) if a == person))
+        .collect();
+    let bounds = w.scene().bounds.unwrap_or(fallback);
+    let inside = theirs.iter().all(|b| {
+        let bb = b.shape.compute_aabb(&b.pose);
+        bb.mins.x >= bounds.mins.x
+            && bb.mins.y >= bounds.mins.y
+            && bb.maxs.x <= bounds.maxs.x
+            && bb.maxs.y <= bounds.maxs.y
+    });
+    inside
+        && bodies.iter().all(|other| {
+            let gap = match other.owner {
+                BodyOwner::Agent(a, _) if a == person => return true,
+                BodyOwner::Object(o) if Some(o) == chair => return true,
+                BodyOwner::Object(o) if w.object(o).movable => return true,
+                // Seated, the knees go under the counter: touching nothing is enough.
+                BodyOwner::Object(_) if chair.is_some() => 0.0,
+                _ => PERSON_CLEARANCE,
+            };
+            theirs.iter().all(|b| {
+                parry3d::query::distance(
+                    &b.pose,
+                    b.shape.as_ref(),
+                    &other.pose,
+                    other.shape.as_ref(),
+                )
+                .is_ok_and(|d| d.distance > gap)
+            })
+        })
+}
+
+/// Whether the person and the robot (from its station) both reach at least
+/// [`SHARED_PATCH_POINTS`] points of the counter's top, 5 cm apart, at effort level 1
+/// ([`STANDING_PATCH_POINTS`] when the person stands).
+pub(crate) fn serves(w: &World, person: AgentId, counter: &Surface, sitting: bool) -> bool {
+    let needed = if sitting {
+        SHARED_PATCH_POINTS
+    } else {
+        STANDING_PATCH_POINTS
+    };
+    shared_points(w, person, counter) >= needed
+}
+
+/// What puts movable objects on a world's support surfaces where the robot picks them up:
+/// shared by the random layouts and the random rooms ([`crate::room_layout`]).
+pub(crate) struct Placer<'a> {
+    /// The world the objects' starting turns are read from (an object that is not book-like
+    /// keeps its turn but for the yaw).
+    pub start: &'a World,
+    pub rules: &'a LayoutRules,
+    pub planner: &'a Planner,
+}
+
+impl Placer<'_> {
+    /// Puts each of `objects` on a free spot (see the module docs), then puts again those the
+    /// robot cannot pick up, for [`PICK_ROUNDS`] rounds; writes their poses into `text`.
+    pub(crate) fn place_all(
+        &self,
+        w: &mut World,
+        text: &mut SceneText,
+        objects: &[ObjectId],
+        rng: &mut fastrand::Rng,
+        seed: u64,
+    ) -> Result<Vec<ObjectPlacement>, String> {
+        let mut placed: BTreeMap<usize, ObjectPlacement> = BTreeMap::new();
+        for &id in objects {
+            placed.insert(id.0, self.place_object(w, id, rng)?);
+        }
+        for round in 0..PICK_ROUNDS {
+            let failed: Vec<(ObjectId, String)> = objects
+                .iter()
+                .filter_map(|&id| self.picks(w, id, seed).err().map(|e| (id, e)))
+                .collect();
+            let Some((_, why)) = failed.first() else {
+                break;
+            };
+            if round + 1 == PICK_ROUNDS {
+                return Err(why.clone());
+            }
+            for (k, &(id, _)) in failed.iter().enumerate() {
+                park(w, id, k);
+            }
+            for &(id, _) in &failed {
+                placed.insert(id.0, self.place_object(w, id, rng)?);
+            }
+        }
+        let mut out = Vec::new();
+        for &id in objects {
+            text.set_object_pose(&w.object(id).name, w.object_pose(id))?;
+            if let Some(p) = placed.remove(&id.0) {
+                out.push(p);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Puts `id` on a random free spot of a random support surface (see the module docs).
+    fn place_object(
+        &self,
+        w: &mut World,
+        id: ObjectId,
+        rng: &mut fastrand::Rng,
+    ) -> Result<ObjectPlacement, String> {
+        let name = w.object(id).name.clone();
+        let all = surfaces(w);
+        if all.is_empty() {
+            return Err("the scene has no support surface".into());
+        }
+        let faces: &[(&str, [f32; 2])] = match w.object(id).kind {
+            geometry::scene::ShapeKind::Box { half_extents } if book_like(half_extents) => {
+                &BOX_FACES
+            }
+            _ => &[("as-in-scene", [0.0, 0.0])],
+        };
+        // The turn the object has in the scene it came from (by name: ids differ in a room).
+        let start = self
+            .start
+            .object_id(&name)
+            .map(|i| self.start.object_pose(i).rotation)
+            .unwrap_or(parry3d::math::Rotation::IDENTITY);
+        let robot = robot_of(w)?;
+        let level = if self.rules.driven_to.contains(&name) {
+            geometry::effort::MAX_EFFORT
+        } else {
+            1
+        };
+        let params = FactParams {
+            max_effort: level,
+            ..FactParams::default()
+        };
+        for _ in 0..OBJECT_DRAWS {
+            let s = all[rng.usize(..all.len())];
+            let (face, [roll, pitch]) = faces[rng.usize(..faces.len())];
+            let yaw = rng.f32() * std::f32::consts::TAU;
+            let rotation = if face == "as-in-scene" {
+                parry3d::math::Rotation::from_rotation_z(yaw) * start
+            } else {
+                pose_from_xyz_rpy([0.0; 3], [roll, pitch, yaw]).rotation
+            };
+            w.set_object_pose(id, Pose::from_parts(Vector::ZERO, rotation));
+            let local = w.object_aabb(id);
+            let half = [local.half_extents().x, local.half_extents().y];
+            park(w, id, 0);
+            let taken = Footprints::of(w);
+            let Some(spot) = taken.draw(&s, half, EDGE_MARGIN, CLEARANCE, 1, rng) else {
+                continue;
+            };
+            let c = local.center();
+            let at = Vector::new(spot.x - c.x, spot.y - c.y, s.centre.z - local.mins.z + 2e-4);
+            w.set_object_pose(id, Pose::from_parts(at, rotation));
+            if !rests_free(w, id, &s) {
+                continue;
+            }
+            if reachable_effort(w, robot, id, &params).is_none() {
+                continue;
+            }
+            return Ok(ObjectPlacement {
+                name,
+                support: w.object(s.support).name.clone(),
+                face,
+                xyz: [at.x, at.y, at.z],
+                yaw_deg: yaw.to_degrees(),
+            });
+        }
+        park(w, id, 0);
+        Err(format!("no free spot for `{name}` in {OBJECT_DRAWS} draws"))
+    }
+
+    /// Whether the robot picks `id` up in `w`: from its station, or (objects the domain drives
+    /// to) from each of the first [`NAVIGATE_POSES`] base poses `navigate-to` finds (the one a
+    /// plan drives to depends on its seed). The base stays where it is (`robot-effort` 1): a
+    /// pick that needs a base move is not what the layout promises.
+    fn picks(&self, w: &World, id: ObjectId, seed: u64) -> Result<(), String> {
+        let name = w.object(id).name.clone();
+        let options = CallOptions {
+            seed,
+            constraints: vec![("robot-effort".into(), "1".into())],
+            deadline: Some(Instant::now() + CHECK_LIMIT),
+        };
+        let pick = |from: &World| -> Result<(), String> {
+            let mut s = self
+                .planner
+                .run(from, "pick", &[&name], &options)
+                .map_err(|e| e.to_string())?;
+            match s.next() {
+                Some(_) => Ok(()),
+                None => Err(s
+                    .failure()
+                    .map(|f| f.to_string())
+                    .unwrap_or_else(|| "no grasp".into())),
+            }
+        };
+        let why = match pick(w) {
+            Ok(()) => return Ok(()),
+            Err(e) => e,
+        };
+        if self.rules.driven_to.contains(&name) {
+            let stream = self
+                .planner
+                .run(w, "navigate-to", &[&name], &options)
+                .map_err(|e| e.to_string())?;
+            let poses: Vec<World> = stream.take(NAVIGATE_POSES).map(|s| s.world).collect();
+            if poses.is_empty() {
+                return Err(format!(
+                    "the robot drives nowhere `{name}` is in reach: {why}"
+                ));
+            }
+            return poses.iter().try_for_each(|from| {
+                pick(from)
+                    .map_err(|e| format!("after driving, the robot cannot pick `{name}`: {e}"))
+            });
+        }
+        Err(format!("the robot cannot pick `{name}` up: {why}"))
+    }
+}
+
+/// Whether `id` touches nothing but its surface's support (agents kept [`CLEARANCE`] away),
+/// and rests on it.
+pub(crate) fn rests_free(w: &World, id: ObjectId, s: &Surface) -> bool {
+    let shape = &w.object(id).shape;
+    let pose = w.object_shape_pose(id);
+    let free = w.bodies().iter().all(|b| match b.owner {
+        BodyOwner::Object(o) if o == id => true,
+        // Resting on its surface, not into the support's other parts (a shelf's boards).
+        BodyOwner::Object(o) if o == s.support => {
+            parry3d::query::contact(&pose, shape.as_ref(), &b.pose, b.shape.as_ref(), 0.0)
+                .ok()
+                .flatten()
+                .is_none_or(|c| -c.dist <= geometry::world::CONTACT_TOLERANCE_M)
+        }
+        BodyOwner::Object(_) => {
+            parry3d::query::intersection_test(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())
+                .is_ok_and(|i| !i.intersecting)
+        }
+        BodyOwner::Agent(..) => {
+            parry3d::query::distance(&pose, shape.as_ref(), &b.pose, b.shape.as_ref())
+                .is_ok_and(|d| d.distance >= CLEARANCE)
+        }
+    });
+    free && on(w, id, s.support, 0.01)
 }
 
 /// How many points of the counter's top, 5 cm apart, the person and the robot (from its
@@ -618,45 +709,54 @@ fn shared_points(w: &World, person: AgentId, counter: &Surface) -> usize {
             .unwrap_or_default()
     };
     let (theirs, robots) = (origins(person), origins(robot));
-    let [hx, hy] = counter.half_extents;
-    let (nx, ny) = ((hx / 0.05) as i32, (hy / 0.05) as i32);
-    let mut shared = 0;
-    for i in -nx..=nx {
-        for j in -ny..=ny {
-            let p = counter.centre + Vector::new(i as f32 * 0.05, j as f32 * 0.05, 0.05);
-            if within_reach(w, person, &theirs, p) && within_reach(w, robot, &robots, p) {
-                shared += 1;
-            }
-        }
-    }
-    shared
+    counter
+        .grid(0.05, 0.05)
+        .into_iter()
+        .filter(|&p| within_reach(w, person, &theirs, p) && within_reach(w, robot, &robots, p))
+        .count()
+}
+
+/// How many points of a surface, 5 cm apart, the robot reaches from its station at effort
+/// level 1.
+pub(crate) fn robot_reach_points(w: &World, s: &Surface) -> usize {
+    let Ok(robot) = robot_of(w) else {
+        return 0;
+    };
+    let origins = stances(w, robot, 1, None)
+        .first()
+        .map(|st| reach_origins(w, robot, st))
+        .unwrap_or_default();
+    s.grid(0.05, 0.05)
+        .into_iter()
+        .filter(|&p| within_reach(w, robot, &origins, p))
+        .count()
 }
 
 /// Whether a box of these half extents is thin like a book (its smallest size under 0.4 of
 /// the middle one): it may stand on its edge or end or lie flat; another box rests as the
 /// scene puts it (a POS machine is not left on its end).
-fn book_like(half: Vector) -> bool {
+pub(crate) fn book_like(half: Vector) -> bool {
     let mut v = [half.x, half.y, half.z];
     v.sort_by(f32::total_cmp);
     v[0] < 0.4 * v[1]
 }
 
 /// The scene's robot.
-fn robot_of(w: &World) -> Result<AgentId, String> {
+pub(crate) fn robot_of(w: &World) -> Result<AgentId, String> {
     w.agent_ids()
         .find(|&a| w.agent(a).kind() == AgentKind::Robot)
         .ok_or_else(|| "the scene has no robot".to_string())
 }
 
 /// The movable objects no agent holds, in the scene's order.
-fn movable(w: &World) -> Vec<ObjectId> {
+pub(crate) fn movable(w: &World) -> Vec<ObjectId> {
     w.object_ids()
         .filter(|&id| w.object(id).movable && w.attachment(id).is_none())
         .collect()
 }
 
 /// Area of an object's footprint as the scene puts it (square metres).
-fn area(w: &World, id: ObjectId) -> f32 {
+pub(crate) fn area(w: &World, id: ObjectId) -> f32 {
     let e = w.object(id).local_aabb.half_extents();
     let mut v = [e.x, e.y, e.z];
     v.sort_by(f32::total_cmp);
@@ -665,7 +765,7 @@ fn area(w: &World, id: ObjectId) -> f32 {
 
 /// Moves `id` out of the way, far below the floor (slot `k` apart from the others), while the
 /// layout is drawn.
-fn park(w: &mut World, id: ObjectId, k: usize) {
+pub(crate) fn park(w: &mut World, id: ObjectId, k: usize) {
     let spot = Vector::new(0.0, 3.0 * k as f32, -100.0 - 3.0 * id.0 as f32);
     w.set_object_pose(id, Pose::from_translation(spot));
 }
@@ -686,7 +786,7 @@ fn chair_of(w: &World, base: Pose) -> Option<ObjectId> {
 }
 
 /// A base pose as the scene format's `(x, y, yaw in degrees)`.
-fn base_xyyaw(base: Pose) -> [f32; 3] {
+pub(crate) fn base_xyyaw(base: Pose) -> [f32; 3] {
     let (yaw, _, _) = base.rotation.to_euler(parry3d::glamx::EulerRot::ZYX);
     [base.translation.x, base.translation.y, yaw.to_degrees()]
 }
@@ -738,7 +838,7 @@ mod tests {
                     o.support
                 );
                 assert!(
-                    g.rests_free(&w, id, &support_surface(&w, id, support)),
+                    rests_free(&w, id, &support_surface(&w, id, support)),
                     "seed {seed}: {} touches something",
                     o.name
                 );

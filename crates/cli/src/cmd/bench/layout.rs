@@ -1,5 +1,6 @@
-//! `bench library --layout random`: the report of the runs planned in random layouts
-//! the share solved, run times, and the failures by GTP task and constraint.
+//! `bench library --layout random|room`: the report of the runs planned in random layouts or
+//! random rooms: the share solved, run times, GTP request latencies, and the failures by GTP
+//! task and constraint; `--json FILE`'s summary.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -22,6 +23,11 @@ pub enum LayoutArg {
     /// along the desk, or standing on free floor facing it, sharing a reach patch of the desk
     /// with the robot.
     Random,
+    /// A random room per run: furniture of every kind drawn (sizes, top heights 0.6-1.1 m,
+    /// places, yaw), the member seated or standing at a free side of the counter, the robot's
+    /// station found, books and the POS machine on any support, books side by side on
+    /// bookshelf boards, clutter (see the long help for what is sensible).
+    Room,
 }
 
 /// The failures of one (task, constraint) pair.
@@ -102,16 +108,147 @@ pub fn report(e: &Experiment) -> LayoutReport {
     }
 }
 
+/// Latencies of GTP solution requests, milliseconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Latency {
+    pub requests: usize,
+    pub median_ms: f64,
+    pub p90_ms: f64,
+    pub p99_ms: f64,
+    pub max_ms: f64,
+}
+
+impl Latency {
+    /// The figures of `times` (seconds, any order).
+    pub fn of(mut times: Vec<f64>) -> Latency {
+        times.sort_by(f64::total_cmp);
+        let ms = |q: f64| quantile(&times, q) * 1e3;
+        Latency {
+            requests: times.len(),
+            median_ms: ms(0.5),
+            p90_ms: ms(0.9),
+            p99_ms: ms(0.99),
+            max_ms: times.last().copied().unwrap_or(0.0) * 1e3,
+        }
+    }
+}
+
+/// One GTP request among the slowest of an experiment.
+#[derive(Clone, Debug, Serialize)]
+pub struct SlowRequest {
+    pub run: usize,
+    pub seed: u64,
+    pub task: String,
+    pub args: Vec<String>,
+    pub solved: bool,
+    /// The constraint that stopped it, for a request that found nothing.
+    pub stage: Option<String>,
+    pub time_ms: f64,
+    pub points: usize,
+    pub grasps: usize,
+    pub orientations: usize,
+    pub planner_calls: usize,
+    pub ik_calls: usize,
+    pub base_poses: usize,
+}
+
+/// The latencies of every GTP request of `e`'s runs: over all, and per task.
+pub fn latencies(e: &Experiment) -> (Latency, BTreeMap<String, Latency>) {
+    let all = e.runs.iter().flat_map(|r| &r.requests);
+    let mut by_task: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for q in all.clone() {
+        by_task
+            .entry(q.task.clone())
+            .or_default()
+            .push(q.search.time_s);
+    }
+    let total = Latency::of(all.map(|q| q.search.time_s).collect());
+    let by_task = by_task
+        .into_iter()
+        .map(|(t, v)| (t, Latency::of(v)))
+        .collect();
+    (total, by_task)
+}
+
+/// The `n` slowest GTP requests of `e`'s runs, slowest first.
+pub fn slowest(e: &Experiment, n: usize) -> Vec<SlowRequest> {
+    let mut all: Vec<SlowRequest> = e
+        .runs
+        .iter()
+        .flat_map(|r| {
+            r.requests.iter().map(move |q| SlowRequest {
+                run: r.index,
+                seed: r.seed,
+                task: q.task.clone(),
+                args: q.args.clone(),
+                solved: q.solved,
+                stage: q.stage.clone(),
+                time_ms: q.search.time_s * 1e3,
+                points: q.search.points,
+                grasps: q.search.grasps,
+                orientations: q.search.orientations,
+                planner_calls: q.search.planner_calls,
+                ik_calls: q.search.ik_calls,
+                base_poses: q.search.base_poses,
+            })
+        })
+        .collect();
+    all.sort_by(|a, b| b.time_ms.total_cmp(&a.time_ms));
+    all.truncate(n);
+    all
+}
+
+/// The machine-readable summary of one strategy's runs (`--json FILE`): success, run times,
+/// GTP request latencies over all and per task, the five slowest requests, failures grouped
+/// by task and constraint.
+pub fn summary(e: &Experiment, r: &LayoutReport) -> serde_json::Value {
+    let (total, by_task) = latencies(e);
+    serde_json::json!({
+        "strategy": e.strategy,
+        "runs": r.runs,
+        "solved": r.solved,
+        "solved_pct": r.solved_pct,
+        "run_time_s": { "median": r.median_time_s, "p90": r.p90_time_s },
+        "wall_time_s": e.wall_time_s,
+        "layout_errors": r.layout_errors,
+        "mean_layout_attempts": r.mean_layout_attempts,
+        "gtp_latency": total,
+        "gtp_latency_by_task": by_task,
+        "slowest_requests": slowest(e, 5),
+        "failures": r.failures,
+    })
+}
+
 /// Prints the report and every failed run with its task, constraint and layout.
-pub fn print(e: &Experiment, r: &LayoutReport) {
+pub fn print(e: &Experiment, r: &LayoutReport, what: &str) {
     println!(
-        "\n### Random layouts ({}): {} of {} solved ({:.1} %); run time median {:.2} s, p90 {:.2} s\n",
+        "\n### {what} ({}): {} of {} solved ({:.1} %); run time median {:.2} s, p90 {:.2} s\n",
         e.strategy, r.solved, r.runs, r.solved_pct, r.median_time_s, r.p90_time_s
     );
     println!(
         "Layouts: {:.2} attempts each on average, {} runs without a layout.",
         r.mean_layout_attempts, r.layout_errors
     );
+    let (total, _) = latencies(e);
+    println!(
+        "GTP requests: {}, latency median {:.1} ms, p90 {:.1} ms, p99 {:.1} ms, max {:.1} ms.",
+        total.requests, total.median_ms, total.p90_ms, total.p99_ms, total.max_ms
+    );
+    for q in slowest(e, 5) {
+        println!(
+            "  slow: run {} {}({}) {:.1} ms, {}{} ({} points, {} orientations, {} trajectory-planner calls, {} base poses)",
+            q.run,
+            q.task,
+            q.args.join(", "),
+            q.time_ms,
+            if q.solved { "solved" } else { "none" },
+            q.stage.map(|s| format!(" at {s}")).unwrap_or_default(),
+            q.points,
+            q.orientations,
+            q.planner_calls,
+            q.base_poses
+        );
+    }
     if r.failures.is_empty() {
         return;
     }

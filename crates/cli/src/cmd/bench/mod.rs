@@ -61,7 +61,30 @@ pub enum Target {
                   arguments and the constraint that stopped it, grouped by task and constraint \
                   (also in library-STRATEGY-layouts.csv and -failures.csv); `--save-scenes DIR` \
                   writes each layout as a scene file for `htngtp plan ... --scene`. With `--layout \
-                  random` the default strategy is geometric-first (symbolic otherwise)."
+                  random` or `room` the default strategy is geometric-first (symbolic \
+                  otherwise).\n\n`--layout room` plans each run in a whole random room, made \
+                  from the run's seed with the scene's robot, member, chair, books and POS \
+                  machine; every other piece of furniture is replaced. Sensible means: \
+                  furniture drawn from kinds (desk, counter, reading table, side table, \
+                  bookshelf with boards, cart, chair) with their sizes, top heights 0.6 to 1.1 \
+                  m, positions and yaw, inside the room (3.6 x 3.6 m) and 5 cm apart (the \
+                  member's chair aside); the counter the member is served at (`desk`: a desk, \
+                  a counter or a reading table); the robot's station on free floor (2 cm from \
+                  everything), facing the counter (within 20 degrees) and reaching at least 25 \
+                  points of its top; a support beside the robot (side table, bookshelf, cart, \
+                  desk or reading table) and up to 3 more pieces anywhere; the member seated on \
+                  the chair (at a desk or table at most 0.8 m high) or standing, on a side of \
+                  the counter the robot does not stand at, facing it, clear of furniture and \
+                  robot, sharing a patch of its top with the robot; every book, the POS machine \
+                  and every clutter object resting on a support surface touching nothing else, \
+                  books standing side by side on the bookshelves' boards, up to 6 things (books \
+                  lying, cups, boxes) on tops (clutter is fixed); the robot picks the books \
+                  from its station and the POS machine from there or after driving, as the \
+                  GTP's pick finds. A seed whose 60 attempts break a rule is refused with the \
+                  count of each reason (the run fails with it).\n\n`--json FILE` writes a \
+                  summary per strategy: runs solved, run times, GTP request latencies (median, \
+                  p90, p99, max; over all and per task), the five slowest requests, failures \
+                  grouped by task and constraint."
 )]
 pub struct LibraryArgs {
     /// Number of runs.
@@ -74,19 +97,24 @@ pub struct LibraryArgs {
     #[arg(long, conflicts_with = "layout")]
     pub fixed: bool,
     /// How the scene varies per run: `nudge` (objects and the member moved by a few
-    /// centimetres) or `random` (objects anywhere sensible, the member seated or standing; see
-    /// the long help).
+    /// centimetres), `random` (objects anywhere sensible, the member seated or standing) or
+    /// `room` (a whole random room; see the long help).
     #[arg(long, value_enum, default_value_t = layout::LayoutArg::Nudge)]
     pub layout: layout::LayoutArg,
-    /// With `--layout random`: write each run's layout as a scene file into this folder
-    /// (`layout-INDEX.toml`), to plan it again with `htngtp plan ... --scene`.
+    /// With `--layout random` or `room`: write each run's layout as a scene file into this
+    /// folder (`layout-INDEX.toml`), to plan it again with `htngtp plan ... --scene`.
     #[arg(long, value_name = "DIR")]
     pub save_scenes: Option<PathBuf>,
-    /// Backtracking strategy [default: symbolic, the paper's, with `--layout nudge`;
-    /// geometric-first, as `bench domain`, with `--layout random`, where the first geometric
-    /// solution is more often a dead end].
-    #[arg(long, value_enum)]
-    pub strategy: Option<crate::cmd::plan::StrategyArg>,
+    /// Backtracking strategy, or several separated by commas, each run on the same scenes
+    /// [default: symbolic, the paper's, with `--layout nudge`; geometric-first, as `bench
+    /// domain`, with `--layout random` or `room`, where the first geometric solution is more
+    /// often a dead end].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub strategy: Vec<crate::cmd::plan::StrategyArg>,
+    /// With `--layout random` or `room`: write a summary per strategy as JSON (success, GTP
+    /// request latencies, the slowest requests, failures by task and constraint).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
     /// With geometric-first: other geometric solutions tried per failure.
     #[arg(long, default_value_t = 3)]
     pub geo_alternatives: usize,
@@ -176,17 +204,27 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
     let domain = crate::input::load_domain(&domain_path)?;
     let problem = htn::load_problem(&problem_path, &domain)?;
     let world = World::load(&scene_path).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let random = args.layout == layout::LayoutArg::Random;
+    let random = args.layout != layout::LayoutArg::Nudge;
     if args.save_scenes.is_some() && !random {
-        anyhow::bail!("--save-scenes needs --layout random");
+        anyhow::bail!("--save-scenes needs --layout random or room");
     }
-    let layouts = if random {
-        let rules = hybrid::random_layout::LayoutRules::default();
-        let l = hybrid::random_layout::RandomLayouts::new(&scene_path, rules)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        Some(std::sync::Arc::new(l))
-    } else {
-        None
+    if args.json.is_some() && !random {
+        anyhow::bail!("--json needs --layout random or room");
+    }
+    let layouts: Option<std::sync::Arc<dyn hybrid::experiment::LayoutSource>> = match args.layout {
+        layout::LayoutArg::Nudge => None,
+        layout::LayoutArg::Random => {
+            let rules = hybrid::random_layout::LayoutRules::default();
+            let l = hybrid::random_layout::RandomLayouts::new(&scene_path, rules)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            Some(std::sync::Arc::new(l))
+        }
+        layout::LayoutArg::Room => {
+            let rules = hybrid::room_layout::RoomRules::default();
+            let l = hybrid::room_layout::RandomRooms::new(&scene_path, rules)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            Some(std::sync::Arc::new(l))
+        }
     };
     if let Some(dir) = &args.save_scenes {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -204,10 +242,15 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
         } else {
             S::Symbolic
         };
-        vec![strategy(
-            args.strategy.unwrap_or(default),
-            args.geo_alternatives,
-        )]
+        let mut chosen = args.strategy.clone();
+        if chosen.is_empty() {
+            chosen.push(default);
+        }
+
+        chosen
+            .into_iter()
+            .map(|s| strategy(s, args.geo_alternatives))
+            .collect()
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -252,16 +295,32 @@ fn library(args: LibraryArgs) -> anyhow::Result<u8> {
                 r.plan_file_error.as_deref().unwrap_or_default()
             );
         }
-        let scene = match (random, args.fixed) {
-            (true, _) => "random-layout",
-            (false, true) => "fixed",
-            (false, false) => "randomized",
+        let scene = match (args.layout, args.fixed) {
+            (layout::LayoutArg::Random, _) => "random-layout",
+            (layout::LayoutArg::Room, _) => "random-room",
+            (_, true) => "fixed",
+            (_, false) => "randomized",
         };
         print_experiment(e, scene);
         write_files(e, &args.out, random)?;
     }
     if results.len() > 1 {
         print_comparison(&results);
+    }
+    if let Some(path) = &args.json {
+        let strategies: Vec<serde_json::Value> = results
+            .iter()
+            .map(|e| layout::summary(e, &layout::report(e)))
+            .collect();
+        let json = serde_json::json!({
+            "layout": format!("{:?}", args.layout).to_lowercase(),
+            "runs": args.runs,
+            "seed": args.seed,
+            "time_limit_s": args.time_limit,
+            "strategies": strategies,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     eprintln!("results written to {}", args.out.display());
     Ok(exit::OK)
@@ -329,8 +388,13 @@ fn print_experiment(e: &Experiment, scene: &str) {
         e.runs.iter().map(|r| r.gtp_backtracks as f64).sum::<f64>() / e.runs.len().max(1) as f64
     );
     println!("Total wall time: {:.1} s", e.wall_time_s);
-    if scene == "random-layout" {
-        layout::print(e, &layout::report(e));
+    if scene == "random-layout" || scene == "random-room" {
+        let what = if scene == "random-room" {
+            "Random rooms"
+        } else {
+            "Random layouts"
+        };
+        layout::print(e, &layout::report(e), what);
         return;
     }
     for r in e.runs.iter().filter(|r| !r.solved).take(5) {
@@ -422,7 +486,19 @@ mod tests {
             Some(std::path::Path::new("scenes"))
         );
         assert_eq!(library(&[]).unwrap().layout, LayoutArg::Nudge);
-        assert!(library(&[]).unwrap().strategy.is_none());
+        assert!(library(&[]).unwrap().strategy.is_empty());
+        let a = library(&[
+            "--layout",
+            "room",
+            "--strategy",
+            "chronological,geometric-first",
+            "--json",
+            "s.json",
+        ])
+        .unwrap();
+        assert_eq!(a.layout, LayoutArg::Room);
+        assert_eq!(a.strategy.len(), 2);
+        assert_eq!(a.json.as_deref(), Some(std::path::Path::new("s.json")));
         assert!(library(&["--layout", "shuffled"]).is_err());
         assert!(library(&["--layout", "random", "--fixed"]).is_err());
     }
