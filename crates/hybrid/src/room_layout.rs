@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use geometry::scene::{AgentId, AgentKind, ObjectId};
-use geometry::world::{BodyOwner, World, base_pose};
+use geometry::world::{Body, BodyOwner, World, base_pose};
 use gtp::planner::Planner;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::{Cuboid, Shape};
@@ -824,15 +824,7 @@ impl RandomRooms {
             .collect();
         others.sort_by_key(|(o, _)| w.object(*o).movable || is_clutter(w, *o));
         for (o, other) in others {
-            let near = theirs.iter().any(|b| {
-                parry3d::query::distance(
-                    &b.pose,
-                    b.shape.as_ref(),
-                    &other.pose,
-                    other.shape.as_ref(),
-                )
-                .is_ok_and(|d| d.distance < ROBOT_CLEARANCE)
-            });
+            let near = theirs.iter().any(|b| closer(b, other, ROBOT_CLEARANCE));
             if near {
                 return Some(format!(
                     "stands within {:.0} cm of `{}`",
@@ -915,17 +907,7 @@ impl RandomRooms {
                         .iter()
                         .filter(move |x| matches!(x.owner, BodyOwner::Object(o) if o == id))
                 };
-                let close = parts(a).any(|x| {
-                    parts(b).any(|y| {
-                        parry3d::query::distance(
-                            &x.pose,
-                            x.shape.as_ref(),
-                            &y.pose,
-                            y.shape.as_ref(),
-                        )
-                        .is_ok_and(|d| d.distance < FURNITURE_GAP)
-                    })
-                });
+                let close = parts(a).any(|x| parts(b).any(|y| closer(x, y, FURNITURE_GAP)));
                 if close {
                     return Some(format!(
                         "`{}` and `{}` stand closer than {:.0} cm",
@@ -961,6 +943,12 @@ impl RandomRooms {
         }
         None
     }
+}
+
+/// Whether two bodies come closer than `d` (metres).
+fn closer(a: &Body<'_>, b: &Body<'_>, d: f32) -> bool {
+    parry3d::query::distance(&a.pose, a.shape.as_ref(), &b.pose, b.shape.as_ref())
+        .is_ok_and(|x| x.distance < d)
 }
 
 /// Whether `id` is clutter of a random room (fixed, not a support, named `clutter-` or
