@@ -1,4 +1,5 @@
-//! A bounded fuzz run over the binary's four input kinds (HDDL, scenes, plan files, plan JSON),
+//! A bounded fuzz run over the binary's six input kinds (HDDL, scenes, plan files, plan JSON,
+//! mesh files, SRDF files),
 //! run by `cargo test` and so by `.ci/run`: mutated corpus files through the library entry
 //! points in process (no panic, no input over [`fuzz_support::SLOW_S`] or the heap cap), then a
 //! small sample through the built binary (exit 0, 1, 2 or 3 only: never a panic's 101 or a
@@ -42,7 +43,13 @@ fn mutated_inputs_never_panic_hang_or_exhaust_memory_in_process() {
     }
     let per_kind: BTreeMap<Kind, u64> = Kind::ALL
         .iter()
-        .map(|&k| (k, if k == Kind::Scene { per / 5 } else { per }))
+        .map(|&k| {
+            let n = match k {
+                Kind::Scene | Kind::Mesh | Kind::Srdf => per / 5,
+                _ => per,
+            };
+            (k, n)
+        })
         .collect();
     let report = fuzz_support::run(
         &seeds,
@@ -97,6 +104,33 @@ fn through_binary(seed: &Seed, bytes: &[u8], dir: &Path, k: usize) -> Vec<Vec<St
             p.source.display().to_string(),
             f,
         ]],
+        Target::Mesh => {
+            // A robot whose one link collides as the mesh.
+            let urdf = dir.join(format!("{k}-mesh.urdf"));
+            std::fs::write(
+                &urdf,
+                format!(
+                    "<robot name=\"m\"><link name=\"base\"/><link name=\"body\"><collision><geometry><mesh filename=\"{f}\"/></geometry></collision></link><joint name=\"j\" type=\"fixed\"><parent link=\"base\"/><child link=\"body\"/></joint></robot>"
+                ),
+            )
+            .unwrap();
+            let scene = robot_scene(dir, k, &urdf, None, "eye = \"body\"\nhands = [\"body\"]\n");
+            vec![vec![
+                "facts".into(),
+                scene,
+                "--resolution".into(),
+                "16".into(),
+            ]]
+        }
+        Target::Srdf { urdf, .. } => {
+            let scene = robot_scene(dir, k, urdf, Some(&file), "");
+            vec![vec![
+                "facts".into(),
+                scene,
+                "--resolution".into(),
+                "16".into(),
+            ]]
+        }
         Target::PlanJson => vec![
             vec!["check".into(), f.clone()],
             vec![
@@ -109,6 +143,26 @@ fn through_binary(seed: &Seed, bytes: &[u8], dir: &Path, k: usize) -> Vec<Vec<St
             ],
         ],
     }
+}
+
+/// A scene in `dir` with one robot from `urdf` (and `srdf`), its extra keys `extra`; returns
+/// its path.
+fn robot_scene(dir: &Path, k: usize, urdf: &Path, srdf: Option<&Path>, extra: &str) -> String {
+    let robots = fuzz_support::root().join("../shared/robots");
+    let srdf = srdf.map_or(String::new(), |s| {
+        format!("srdf = {:?}\n", s.display().to_string())
+    });
+    let scene = dir.join(format!("{k}-robot.toml"));
+    std::fs::write(
+        &scene,
+        format!(
+            "[scene]\nname = \"fuzz\"\npackage_path = [{:?}]\n\n[[agents]]\nname = \"bot\"\nkind = \"robot\"\nurdf = {:?}\n{srdf}{extra}",
+            robots.display().to_string(),
+            urdf.display().to_string()
+        ),
+    )
+    .unwrap();
+    scene.display().to_string()
 }
 
 /// The `--time-limit` of a command line, seconds.
@@ -128,7 +182,10 @@ fn a_sample_of_mutated_inputs_through_the_binary_exits_cleanly() {
     let mut failures = Vec::new();
     for kind in Kind::ALL {
         let of_kind: Vec<&Seed> = seeds.iter().filter(|s| s.kind == kind).collect();
-        let n = if kind == Kind::Scene { 8 } else { 25 };
+        let n = match kind {
+            Kind::Scene | Kind::Mesh | Kind::Srdf => 8,
+            _ => 25,
+        };
         for k in 0..n {
             let seed = of_kind[rng.usize(0..of_kind.len())];
             let other = of_kind[rng.usize(0..of_kind.len())];

@@ -282,3 +282,51 @@ fn a_collada_file_with_a_bad_index_is_refused_without_a_panic() {
     let o = facts(&scene, &[]);
     assert_bad_input(&o, &["link 'body'", "bad.dae"]);
 }
+
+/// `scene_with`'s robot with the SRDF `srdf` (its body only) beside it.
+fn scene_with_srdf(dir: &Path, srdf: &str) -> PathBuf {
+    let scene = scene_with(dir, "", "");
+    std::fs::write(
+        dir.join("robot.srdf"),
+        format!("<?xml version=\"1.0\"?>\n<robot name=\"meshbot\">\n{srdf}</robot>\n"),
+    )
+    .unwrap();
+    scene
+}
+
+#[test]
+fn an_srdf_naming_an_unknown_link_is_refused() {
+    let dir = scratch("srdf-link");
+    let scene = scene_with_srdf(
+        &dir,
+        "  <group name=\"arm\"><chain base_link=\"base\" tip_link=\"wrist\"/></group>\n",
+    );
+    let o = facts(&scene, &[]);
+    assert_bad_input(&o, &["robot.srdf:3:", "unknown link `wrist`"]);
+}
+
+#[test]
+fn an_srdf_naming_an_unknown_joint_is_refused() {
+    let dir = scratch("srdf-joint");
+    let scene = scene_with_srdf(
+        &dir,
+        "  <disable_collisions link1=\"base\" link2=\"body\" reason=\"Adjacent\"/>\n  <passive_joint name=\"elbow\"/>\n",
+    );
+    let o = facts(&scene, &[]);
+    assert_bad_input(&o, &["robot.srdf:4:", "unknown joint `elbow`"]);
+}
+
+#[test]
+fn a_urdf_with_a_joint_loop_is_refused() {
+    let dir = scratch("loop");
+    let urdf = "<?xml version=\"1.0\"?>\n<robot name=\"loopbot\">\n  <link name=\"a\"/>\n  <link name=\"b\"/>\n  <link name=\"c\"/>\n  <joint name=\"ab\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n  <joint name=\"bc\" type=\"fixed\"><parent link=\"b\"/><child link=\"c\"/></joint>\n  <joint name=\"ca\" type=\"fixed\"><parent link=\"c\"/><child link=\"a\"/></joint>\n</robot>\n";
+    std::fs::write(dir.join("loop.urdf"), urdf).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[scene]\nname = \"loop\"\n\n[[agents]]\nname = \"bot\"\nkind = \"robot\"\nurdf = \"loop.urdf\"\neye = \"a\"\nshoulders = [\"a\"]\nhands = [\"a\"]\n",
+    )
+    .unwrap();
+    let o = facts(&scene, &[]);
+    assert_bad_input(&o, &["loop.urdf", "the joints form a cycle"]);
+}

@@ -2,7 +2,7 @@
 //! (`crates/cli/tests/fuzz_inputs.rs`, run by `.ci/run`) and the long run
 //! (`cargo run --release -p htngtp --example fuzz_inputs -- --inputs 1000000`).
 //!
-//! Four kinds of input, each mutated from a corpus of real files and handed to the library entry
+//! Six kinds of input, each mutated from a corpus of real files and handed to the library entry
 //! points the binary calls, in this process (fast):
 //! - HDDL: domains (`parse_domain`) and problems (`parse_problem` against their parsed domain,
 //!   then a short search, as `htngtp plan`, when the problem parses);
@@ -11,12 +11,16 @@
 //! - plan files in the competition format: `Plan::parse`, then `validate_with`, exact and
 //!   lenient, as `htngtp validate`;
 //! - plan JSON: `check::parse_plan` then `check_plan` (as `htngtp check`), the viewer's loading
-//!   check (`htngtp view`), and the plan JSON `htngtp validate` accepts.
+//!   check (`htngtp view`), and the plan JSON `htngtp validate` accepts;
+//! - mesh files (STL, COLLADA, OBJ): `mesh_file::parse_mesh`, then the convex geometry a URDF
+//!   link collides as (`convex::guarded_convex`), as a scene's robot loads them;
+//! - SRDF files: read against their URDF's model (`AgentModel::with_srdf_str`).
 //!
 //! Every call runs under `catch_unwind`; a global counting allocator gives each input's peak
 //! heap; a watchdog ends the run, writing the input out, when one input takes longer than
-//! [`HANG_S`]. The corpus: `domains/`, `crates/*/tests` files, `viewer/fixtures`, and the shared
-//! benchmark folders and verdict corpus when `../shared` is present.
+//! [`HANG_S`]. The corpus: `domains/`, `crates/*/tests` files, `viewer/fixtures`, `models/`, a
+//! few meshes written here, and the shared benchmark folders, verdict corpus and robot
+//! descriptions when `../shared` is present.
 
 #![allow(dead_code)]
 
@@ -100,23 +104,34 @@ const SEARCH_NODES: u64 = 2_000;
 // ---------------------------------------------------------------------------------------------
 // The corpus.
 
-/// The four input kinds.
+/// The six input kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Kind {
     Hddl,
     Scene,
     PlanText,
     PlanJson,
+    Mesh,
+    Srdf,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 4] = [Kind::Hddl, Kind::Scene, Kind::PlanText, Kind::PlanJson];
+    pub const ALL: [Kind; 6] = [
+        Kind::Hddl,
+        Kind::Scene,
+        Kind::PlanText,
+        Kind::PlanJson,
+        Kind::Mesh,
+        Kind::Srdf,
+    ];
     pub fn name(self) -> &'static str {
         match self {
             Kind::Hddl => "hddl",
             Kind::Scene => "scene",
             Kind::PlanText => "plan-text",
             Kind::PlanJson => "plan-json",
+            Kind::Mesh => "mesh",
+            Kind::Srdf => "srdf",
         }
     }
 }
@@ -126,9 +141,19 @@ impl Kind {
 pub enum Target {
     Domain,
     Problem(Arc<Domain>),
-    Scene { base_dir: PathBuf, stem: String },
+    Scene {
+        base_dir: PathBuf,
+        stem: String,
+    },
     PlanText(Arc<Domain>, Arc<Problem>),
     PlanJson,
+    /// A mesh file; its path's extension gives the format.
+    Mesh,
+    /// An SRDF, read against the model of the URDF `urdf`.
+    Srdf {
+        urdf: PathBuf,
+        model: Arc<geometry::agent::AgentModel>,
+    },
 }
 
 /// One corpus file.
@@ -365,7 +390,133 @@ pub fn corpus(shared: bool, max_hddl: u64) -> Vec<Seed> {
             });
         }
     }
+    mesh_seeds(&root, shared, &mut seeds);
+    srdf_seeds(&root, shared, &mut seeds);
     seeds
+}
+
+/// Mesh files: the tests' own, three written here (a binary and an ASCII STL cube, a COLLADA
+/// cube with a unit and a node transform), and the shared robots' up to 256 kB.
+fn mesh_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
+    let mut paths = Vec::new();
+    let robots = root.join("../shared/robots");
+    for ext in ["stl", "dae", "obj"] {
+        files(
+            &root.join("crates/geometry/tests"),
+            ext,
+            1 << 20,
+            &mut paths,
+        );
+        if shared {
+            files(&robots, ext, 256 << 10, &mut paths);
+        }
+    }
+    for path in paths {
+        if let Ok(text) = std::fs::read(&path) {
+            seeds.push(Seed {
+                kind: Kind::Mesh,
+                path,
+                text,
+                target: Target::Mesh,
+            });
+        }
+    }
+    let cube = cube_triangles();
+    let mut binary = vec![0u8; 80];
+    binary.extend_from_slice(&(cube.len() as u32).to_le_bytes());
+    let mut ascii = String::from("solid cube\n");
+    for t in &cube {
+        binary.extend_from_slice(&[0u8; 12]);
+        ascii.push_str(" facet normal 0 0 0\n  outer loop\n");
+        for v in t {
+            for c in v {
+                binary.extend_from_slice(&c.to_le_bytes());
+            }
+            ascii.push_str(&format!("   vertex {} {} {}\n", v[0], v[1], v[2]));
+        }
+        binary.extend_from_slice(&[0u8; 2]);
+        ascii.push_str("  endloop\n endfacet\n");
+    }
+    ascii.push_str("endsolid cube\n");
+    let corners: Vec<String> = (0..8)
+        .map(|i| format!("{} {} {}", i & 1, (i >> 1) & 1, (i >> 2) & 1))
+        .collect();
+    let dae = format!(
+        "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">\n<asset><unit meter=\"0.01\"/><up_axis>Z_UP</up_axis></asset>\n<library_geometries><geometry id=\"g\"><mesh>\n<source id=\"p\"><float_array id=\"pa\" count=\"24\">{}</float_array><technique_common><accessor source=\"#pa\" count=\"8\" stride=\"3\"><param name=\"X\" type=\"float\"/><param name=\"Y\" type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor></technique_common></source>\n<vertices id=\"v\"><input semantic=\"POSITION\" source=\"#p\"/></vertices>\n<triangles count=\"12\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/><p>0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5</p></triangles>\n</mesh></geometry></library_geometries>\n<library_visual_scenes><visual_scene id=\"s\"><node id=\"n\"><matrix>1 0 0 0.5 0 1 0 0 0 0 1 0 0 0 0 1</matrix><instance_geometry url=\"#g\"/></node></visual_scene></library_visual_scenes>\n<scene><instance_visual_scene url=\"#s\"/></scene>\n</COLLADA>\n",
+        corners.join(" ")
+    );
+    for (name, text) in [
+        ("written-binary.stl", binary),
+        ("written-ascii.stl", ascii.into_bytes()),
+        ("written-cube.dae", dae.into_bytes()),
+    ] {
+        seeds.push(Seed {
+            kind: Kind::Mesh,
+            path: PathBuf::from(name),
+            text,
+            target: Target::Mesh,
+        });
+    }
+}
+
+/// The 12 triangles of the unit cube, outward.
+fn cube_triangles() -> Vec<[[f32; 3]; 3]> {
+    let c = |i: usize| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32];
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    quads
+        .iter()
+        .flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]])
+        .collect()
+}
+
+/// SRDF files with the URDF each describes: the project's models, and the shared robots'
+/// MoveIt SRDFs when present.
+fn srdf_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
+    let models = root.join("models");
+    let mut pairs: Vec<(PathBuf, PathBuf)> = ["pr2", "fetch", "human"]
+        .iter()
+        .map(|m| {
+            (
+                models.join(format!("{m}.srdf")),
+                models.join(format!("{m}.urdf")),
+            )
+        })
+        .collect();
+    if shared {
+        let robots = root.join("../shared/robots");
+        pairs.push((
+            robots.join("pr2_description/srdf/robot.xml"),
+            robots.join("pr2_description/urdf/robot.xml"),
+        ));
+        pairs.push((
+            robots.join("panda_moveit_config/config/panda.srdf"),
+            robots.join("panda_description/urdf/panda.urdf"),
+        ));
+    }
+    for (srdf, urdf) in pairs {
+        let (Ok(text), Ok(model)) = (
+            std::fs::read(&srdf),
+            geometry::agent::AgentModel::from_urdf_file(&urdf),
+        ) else {
+            continue;
+        };
+        seeds.push(Seed {
+            kind: Kind::Srdf,
+            path: srdf,
+            text,
+            target: Target::Srdf {
+                urdf,
+                model: Arc::new(model),
+            },
+        });
+    }
 }
 
 /// Keeps the first two and the last frame of every trajectory of a plan JSON: a seed of a few
@@ -447,6 +598,15 @@ fn guarded(f: impl FnOnce() -> bool) -> Verdict {
 /// Hands `bytes` to the entry points for `seed`'s kind, as the binary would (its text read as
 /// UTF-8 first, as the binary reads its inputs).
 pub fn run_input(seed: &Seed, bytes: &[u8]) -> Verdict {
+    if let Target::Mesh = &seed.target {
+        // Binary STL is not text.
+        return guarded(|| {
+            use geometry::agent::{ConvexMode, convex};
+            geometry::mesh_file::parse_mesh(bytes, &seed.path)
+                .and_then(|m| convex::guarded_convex(&m, [1.0; 3], ConvexMode::Auto))
+                .is_ok()
+        });
+    }
     let Ok(text) = std::str::from_utf8(bytes) else {
         // The binary refuses text that is not UTF-8 before parsing it.
         return Verdict::Refused;
@@ -527,6 +687,18 @@ pub fn run_input(seed: &Seed, bytes: &[u8]) -> Verdict {
             }
             exact.is_ok() || lenient.is_ok()
         }),
+        Target::Mesh => unreachable!("read above"),
+        Target::Srdf { model, .. } => {
+            guarded(
+                || match (**model).clone().with_srdf_str(text, "fuzz.srdf") {
+                    Ok(_) => true,
+                    Err(e) => {
+                        let _ = e.to_string();
+                        false
+                    }
+                },
+            )
+        }
         Target::PlanJson => guarded(|| {
             // `htngtp view`'s loading check.
             let view_ok = serde_json::from_str::<serde_json::Value>(text)

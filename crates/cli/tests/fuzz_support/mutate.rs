@@ -128,12 +128,52 @@ const JSON_TOKENS: &[&str] = &[
     "\\u0000",
 ];
 
+const XML_TOKENS: &[&str] = &[
+    "<",
+    ">",
+    "/>",
+    "</",
+    "\"",
+    "=",
+    "<group name=\"g\">",
+    "</group>",
+    "<chain base_link=\"a\" tip_link=\"b\"/>",
+    "<joint name=\"j\"/>",
+    "<link name=\"l\"/>",
+    "<group name=\"arm\"/>",
+    "<end_effector name=\"e\" parent_link=\"x\" group=\"g\"/>",
+    "<disable_collisions link1=\"a\" link2=\"a\" reason=\"Never\"/>",
+    "<virtual_joint name=\"v\" type=\"floating\" parent_frame=\"w\" child_link=\"x\"/>",
+    "<group_state name=\"s\" group=\"g\"><joint name=\"j\" value=\"1e30\"/></group_state>",
+    "<triangles count=\"99999999\">",
+    "<p>0 1 99999</p>",
+    "<float_array count=\"3\">nan inf 1</float_array>",
+    "<unit meter=\"0\"/>",
+    "<matrix>0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0</matrix>",
+    "<!--",
+    "-->",
+    "&amp;",
+    "&#0;",
+    "<![CDATA[",
+    "solid",
+    "facet normal",
+    "vertex 1e30 0 0",
+    "endloop",
+    "v 0 0 0",
+    "f 1 2 99",
+    "f -1 -2 -3",
+    "nan",
+    "-0",
+    "\n",
+];
+
 fn tokens(kind: Kind) -> &'static [&'static str] {
     match kind {
         Kind::Hddl => HDDL_TOKENS,
         Kind::Scene => TOML_TOKENS,
         Kind::PlanText => PLAN_TOKENS,
         Kind::PlanJson => JSON_TOKENS,
+        Kind::Mesh | Kind::Srdf => XML_TOKENS,
     }
 }
 
@@ -205,6 +245,7 @@ fn mutate_once(rng: &mut fastrand::Rng, kind: Kind, text: &mut Vec<u8>, other: &
                 Kind::Hddl => b"()",
                 Kind::Scene | Kind::PlanJson => b"[]{}\"",
                 Kind::PlanText => b"\n-> ",
+                Kind::Mesh | Kind::Srdf => b"<>/\"\n",
             };
             let at: Vec<usize> = (0..n).filter(|&i| brackets.contains(&text[i])).collect();
             if !at.is_empty() {

@@ -76,16 +76,23 @@ pub fn convex_mesh(
         return Ok(found.clone());
     }
     let mesh = mesh_file::read_mesh(path)?;
-    // parry's hull and VHACD may panic on degenerate input; a bad mesh must not take the
-    // caller down.
-    let made = std::panic::catch_unwind(|| make_convex(&mesh, scale, mode))
-        .map_err(|_| "the convex hull computation failed on this mesh (degenerate?)".to_string())?;
-    let made = Arc::new(made?);
+    let made = Arc::new(guarded_convex(&mesh, scale, mode)?);
     cache
         .lock()
         .unwrap_or_else(|e| e.into_inner())
         .insert(key, made.clone());
     Ok(made)
+}
+
+/// [`make_convex`], with a panic of parry's hull or VHACD (on degenerate input) turned into an
+/// error: a bad mesh must not take the caller down.
+pub fn guarded_convex(
+    mesh: &mesh_file::MeshData,
+    scale: [f32; 3],
+    mode: ConvexMode,
+) -> Result<ConvexMesh, String> {
+    std::panic::catch_unwind(|| make_convex(mesh, scale, mode))
+        .map_err(|_| "the convex hull computation failed on this mesh (degenerate?)".to_string())?
 }
 
 /// The convex pieces of `mesh` scaled by `scale`.
