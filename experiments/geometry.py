@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """htngtp's geometric benchmarks through Downward Lab: the paper's library experiment
-(`htngtp bench library`, scenes nudged or random layouts) and GTP tasks alone (`htngtp gtp`),
-one Lab run per seed and scene, with success and latency parsed.
+(`htngtp bench library`: scenes nudged, random layouts or random rooms) and GTP tasks alone
+(`htngtp gtp`), one Lab run per seed and scene, with success and latency parsed.
 
   target/labenv/bin/python experiments/geometry.py --seed 1 --runs 100 --fresh --all   # Table II
   target/labenv/bin/python experiments/geometry.py --layout random --seed 1 --runs 100 \\
@@ -68,11 +68,11 @@ def main():
                     help="a seed or a range of seeds, A to B (repeatable; default 1)")
     ap.add_argument("--runs", type=int, default=10,
                     help="library runs (scenes) per seed and layout (default 10)")
-    ap.add_argument("--layout", action="append", choices=["nudge", "random"],
+    ap.add_argument("--layout", action="append", choices=["nudge", "random", "room"],
                     help="library scene variation (repeatable; default nudge)")
     ap.add_argument("--strategy", action="append", choices=STRATEGIES,
                     help="library backtracking strategy (repeatable; default: the bench's own "
-                    "per layout, symbolic for nudge and geometric-first for random)")
+                    "per layout, symbolic for nudge and geometric-first for random and room)")
     ap.add_argument("--time-limit", type=int, default=60, help="seconds per library run (default 60)")
     ap.add_argument("--check", action="store_true",
                     help="check each solved library run's plan with `htngtp check`")

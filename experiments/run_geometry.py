@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """One Lab run of a geometric benchmark; prints one line `htngtp-result: {...}` for the parser.
 
-    run_geometry.py library BINARY --seed S --runs N --index I --layout nudge|random
+    run_geometry.py library BINARY --seed S --runs N --index I --layout nudge|random|room
                     [--strategy X] --time-limit T [--check] [--package-path DIR]
         `htngtp bench library --runs N --only I ...`: run I of the experiment with seed S (its
         own randomized scene), parsed from the bench's JSON. Attributes: outcome
@@ -106,7 +106,7 @@ def main(argv):
     lib.add_argument("--seed", type=int, required=True)
     lib.add_argument("--runs", type=int, required=True)
     lib.add_argument("--index", type=int, required=True)
-    lib.add_argument("--layout", choices=["nudge", "random"], default="nudge")
+    lib.add_argument("--layout", choices=["nudge", "random", "room"], default="nudge")
     lib.add_argument("--strategy")
     lib.add_argument("--time-limit", type=int, default=60)
     lib.add_argument("--check", action="store_true")
