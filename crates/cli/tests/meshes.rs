@@ -330,3 +330,24 @@ fn a_urdf_with_a_joint_loop_is_refused() {
     let o = facts(&scene, &[]);
     assert_bad_input(&o, &["loop.urdf", "the joints form a cycle"]);
 }
+
+#[test]
+fn a_scene_starts_an_agent_in_a_named_srdf_posture() {
+    let dir = scratch("posture");
+    let scene = scene_with_srdf(
+        &dir,
+        "  <group name=\"body\"><joint name=\"lift\"/></group>\n  <group_state name=\"up\" group=\"body\"><joint name=\"lift\" value=\"0.15\"/></group_state>\n",
+    );
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, format!("{text}posture = \"up\"\n")).unwrap();
+    let world = geometry::world::World::load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let q = &world.agent_state(geometry::scene::AgentId(0)).q;
+    assert_eq!(q.as_slice(), &[0.15]);
+    assert!(facts(&scene, &[]).status.success());
+    std::fs::write(&scene, format!("{text}posture = \"down\"\n")).unwrap();
+    let o = facts(&scene, &[]);
+    assert_bad_input(
+        &o,
+        &["agents[0].posture", "no posture `down`", "robot.srdf"],
+    );
+}

@@ -196,6 +196,8 @@ struct AgentSpec {
     srdf: Option<String>,
     #[serde(default)]
     base: BaseSpec,
+    /// A named posture of the SRDF (`group_state`), applied before `joints`.
+    posture: Option<String>,
     /// Joint values by URDF joint name (radians, metres for prismatic joints).
     #[serde(default)]
     joints: BTreeMap<String, f32>,
@@ -320,6 +322,8 @@ pub struct AgentSpecResolved {
     /// Base pose on the floor: x, y (metres), yaw (radians).
     pub base: [f32; 3],
     /// Joint values by name, as written.
+    /// The SRDF posture (`group_state` name) the agent starts in, before `joints`.
+    pub posture: Option<String>,
     pub joints: Vec<(String, f32)>,
     /// Link whose frame is the eye / camera (x forward, z up).
     pub eye: Option<String>,
@@ -664,6 +668,7 @@ fn agent_spec(
         urdf,
         srdf,
         base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
+        posture: a.posture.clone(),
         joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
         eye: a.eye.clone(),
         shoulders: a.shoulders.clone(),

@@ -247,6 +247,23 @@ impl World {
                 None => model,
             };
             let mut q = model.default_configuration().into_vec();
+            if let Some(name) = &spec.posture {
+                let values = model.posture(name);
+                if values.is_empty() {
+                    return Err(scene.error(
+                        &format!("{at}.posture"),
+                        format!(
+                            "no posture `{name}` (a `group_state` with joint values) in the SRDF{}",
+                            spec.srdf
+                                .as_ref()
+                                .map_or(String::new(), |p| format!(" {}", p.display()))
+                        ),
+                    ));
+                }
+                for (k, v) in values {
+                    q[k] = model.dof_limits()[k].clamp(v);
+                }
+            }
             for (name, v) in &spec.joints {
                 let k = model.dof_index(name).map_err(|_| {
                     scene.error(

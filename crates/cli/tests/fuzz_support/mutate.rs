@@ -82,6 +82,7 @@ const TOML_TOKENS: &[&str] = &[
     "'",
     "\"\"\"",
     "kind = \"human\"",
+    "posture = \"ready\"",
     "kind = \"robot\"",
     "urdf = \"/dev/zero\"",
     "\\u0000",
