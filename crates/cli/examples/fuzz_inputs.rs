@@ -1,11 +1,12 @@
-//! The long fuzz run of the binary's inputs (HDDL, scenes, plan files, plan JSON), in process.
+//! The long fuzz run of the binary's inputs (HDDL, scenes, plan files, plan JSON, mesh files,
+//! SRDF files), in process.
 //!
 //! ```sh
 //! cargo run --release -p htngtp --example fuzz_inputs -- --inputs 1000000 --seed 1
 //! ```
-//! `--inputs N` is the total, split among the kinds by `--shares H,S,T,J` (default
-//! 50,15,30,5 percent); `--out DIR` is where failing inputs go (default
-//! `target/fuzz-inputs`); `--no-shared` leaves out `../shared` (benchmarks, verdict corpus).
+//! `--inputs N` is the total, split among the kinds by `--shares H,S,T,J,M,R` (default
+//! 45,13,27,5,5,5 percent); `--out DIR` is where failing inputs go (default
+//! `target/fuzz-inputs`); `--no-shared` leaves out `../shared` (benchmarks, verdict corpus, robots).
 //! Exit 0 when no input panicked, hung, ran over the time or the memory bound; 1 otherwise.
 //! See `crates/cli/tests/fuzz_support/mod.rs`.
 
@@ -23,7 +24,7 @@ static ALLOC: Counting = Counting;
 fn main() {
     let mut inputs: u64 = 10_000;
     let mut seed: u64 = 1;
-    let mut shares = [50u64, 15, 30, 5];
+    let mut shares = [45u64, 13, 27, 5, 5, 5];
     let mut out = fuzz_support::root().join("target/fuzz-inputs");
     let mut shared = true;
     let mut args = std::env::args().skip(1);
@@ -39,7 +40,9 @@ fn main() {
             "--no-shared" => shared = false,
             "--shares" => {
                 let v: Vec<u64> = value().split(',').filter_map(|x| x.parse().ok()).collect();
-                shares = v.try_into().unwrap_or_else(|_| usage("--shares H,S,T,J"));
+                shares = v
+                    .try_into()
+                    .unwrap_or_else(|_| usage("--shares H,S,T,J,M,R"));
             }
             _ => usage(&format!("unknown argument {a}")),
         }
@@ -74,7 +77,7 @@ fn main() {
 
 fn usage(msg: &str) -> ! {
     eprintln!(
-        "fuzz_inputs: {msg}\nusage: fuzz_inputs [--inputs N] [--seed N] [--shares H,S,T,J] [--out DIR] [--no-shared]"
+        "fuzz_inputs: {msg}\nusage: fuzz_inputs [--inputs N] [--seed N] [--shares H,S,T,J,M,R] [--out DIR] [--no-shared]"
     );
     std::process::exit(2);
 }

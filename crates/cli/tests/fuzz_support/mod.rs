@@ -476,6 +476,21 @@ fn cube_triangles() -> Vec<[[f32; 3]; 3]> {
         .collect()
 }
 
+/// The model of the URDF at `path`, its `package://` names searched in `packages`.
+fn urdf_model(path: &Path, packages: &Path) -> Result<geometry::agent::AgentModel, String> {
+    use geometry::agent::{AgentModel, MeshOptions, PackagePath};
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    let options = MeshOptions {
+        packages: PackagePath {
+            urdf_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            scene_dirs: vec![packages.to_path_buf()],
+        },
+        modes: Default::default(),
+    };
+    AgentModel::from_urdf_str_with(&text, &path.display().to_string(), &options)
+        .map_err(|e| e.to_string())
+}
+
 /// SRDF files with the URDF each describes: the project's models, and the shared robots'
 /// MoveIt SRDFs when present.
 fn srdf_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
@@ -500,11 +515,9 @@ fn srdf_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
             robots.join("panda_description/urdf/panda.urdf"),
         ));
     }
+    let robots = root.join("../shared/robots");
     for (srdf, urdf) in pairs {
-        let (Ok(text), Ok(model)) = (
-            std::fs::read(&srdf),
-            geometry::agent::AgentModel::from_urdf_file(&urdf),
-        ) else {
+        let (Ok(text), Ok(model)) = (std::fs::read(&srdf), urdf_model(&urdf, &robots)) else {
             continue;
         };
         seeds.push(Seed {
