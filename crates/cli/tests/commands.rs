@@ -207,3 +207,49 @@ fn plan_gtp_settings_are_checked_before_the_search() {
         assert!(text(&out.stderr).contains(said), "{}", text(&out.stderr));
     }
 }
+
+/// `bench library --layout room`: the rooms are written as scene files that plan again, the
+/// `--json` summary has success and GTP latencies per strategy, and `--save-scenes` without a
+/// random layout is refused.
+#[test]
+fn random_rooms_are_saved_and_summarised() {
+    let dir = scratch("rooms");
+    let (scenes, json) = (dir.join("scenes"), dir.join("summary.json"));
+    let run = Command::new(env!("CARGO_BIN_EXE_htngtp"))
+        .args([
+            "bench", "library", "--layout", "room", "--runs", "2", "--seed", "1",
+        ])
+        .args([
+            "--strategy",
+            "geometric-first",
+            "--time-limit",
+            "30",
+            "--out",
+        ])
+        .arg(dir.join("out"))
+        .arg("--save-scenes")
+        .arg(&scenes)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .expect("htngtp runs");
+    assert_eq!(run.status.code(), Some(0), "{}", text(&run.stderr));
+    assert!(text(&run.stdout).contains("### Random rooms (geometric-first)"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let s = &summary["strategies"][0];
+    assert_eq!(s["strategy"], "geometric-first");
+    assert_eq!(s["runs"], 2);
+    let latency = &s["gtp_latency"];
+    assert!(latency["requests"].as_u64().unwrap() > 0, "{summary}");
+    assert!(latency["p99_ms"].as_f64().unwrap() <= latency["max_ms"].as_f64().unwrap());
+    for i in 0..2 {
+        let scene = scenes.join(format!("layout-00{i}.toml"));
+        let facts = htngtp(&["facts"], &[&scene]);
+        assert_eq!(facts.status.code(), Some(0), "{}", text(&facts.stderr));
+    }
+    let refused = htngtp(&["bench", "library", "--save-scenes", "x"], &[]);
+    assert_eq!(refused.status.code(), Some(3), "{}", text(&refused.stderr));
+    assert!(text(&refused.stderr).contains("--layout random or room"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
