@@ -792,7 +792,7 @@ pub(crate) fn base_xyyaw(base: Pose) -> [f32; 3] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use geometry::world::Precision;
 
@@ -801,18 +801,22 @@ mod tests {
         RandomLayouts::new(&scene, LayoutRules::default()).unwrap()
     }
 
-    #[test]
-    fn the_same_seed_gives_the_same_layout_and_another_seed_another() {
-        let g = generator();
+    /// `seed` gives the same scene twice (text and world), `other` another one.
+    pub(crate) fn assert_seeded(g: &dyn crate::experiment::LayoutSource, seed: u64, other: u64) {
         let (a, b, c) = (
-            g.generate(5).unwrap(),
-            g.generate(5).unwrap(),
-            g.generate(6).unwrap(),
+            g.generate(seed).unwrap(),
+            g.generate(seed).unwrap(),
+            g.generate(other).unwrap(),
         );
         assert_eq!(a.toml, b.toml);
         let f = |l: &Layout| l.world.fingerprint(Precision::Exact);
         assert_eq!(f(&a), f(&b));
         assert_ne!(f(&a), f(&c));
+    }
+
+    #[test]
+    fn the_same_seed_gives_the_same_layout_and_another_seed_another() {
+        assert_seeded(&generator(), 5, 6);
     }
 
     #[test]

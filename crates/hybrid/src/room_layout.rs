@@ -1093,7 +1093,6 @@ fn colour_of(kind: Kind, rng: &mut fastrand::Rng) -> [u8; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use geometry::world::Precision;
 
     fn generator() -> RandomRooms {
         let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../domains/library/scene.toml");
@@ -1102,16 +1101,7 @@ mod tests {
 
     #[test]
     fn the_same_seed_gives_the_same_room_and_another_seed_another() {
-        let g = generator();
-        let (a, b, c) = (
-            g.generate(3).unwrap(),
-            g.generate(3).unwrap(),
-            g.generate(4).unwrap(),
-        );
-        assert_eq!(a.toml, b.toml);
-        let f = |l: &Layout| l.world.fingerprint(Precision::Exact);
-        assert_eq!(f(&a), f(&b));
-        assert_ne!(a.toml, c.toml);
+        crate::random_layout::tests::assert_seeded(&generator(), 3, 4);
     }
 
     #[test]
