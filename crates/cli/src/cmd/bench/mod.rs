@@ -105,7 +105,7 @@ pub struct LibraryArgs {
     /// folder (`layout-INDEX.toml`), to plan it again with `htngtp plan ... --scene`.
     #[arg(long, value_name = "DIR")]
     pub save_scenes: Option<PathBuf>,
-    /// Backtracking strategy, or several separated by commas, each run on the same scenes
+    /// Backtracking strategy, or several separated by commas, each run over the same seeds
     /// [default: symbolic, the paper's, with `--layout nudge`; geometric-first, as `bench
     /// domain`, with `--layout random` or `room`, where the first geometric solution is more
     /// often a dead end].
