@@ -38,7 +38,7 @@ def _stats(text: Optional[str]) -> Dict[str, Any]:
 
 class LimitReached(HtngtpError):
     """The search stopped incomplete: ``limit`` is ``"time"``, ``"nodes"``, ``"memory"`` or
-    ``"geometric-alternatives"`` (the strategy's cap on geometric solutions: not a proof that
+    ``"geometric-alternatives"`` (the symbolic strategy's cap on geometric solutions: not a proof that
     no plan exists); ``stats`` are the search's statistics so far (empty when it stopped before
     searching)."""
 

@@ -16,8 +16,8 @@ pub mod exit {
     pub const OK: u8 = 0;
     /// The problem is proven unsolvable (or a checked plan is invalid).
     pub const UNSOLVABLE: u8 = 1;
-    /// A time, node or memory limit stopped the search, or the strategy's cap on geometric
-    /// alternatives (symbolic, geometric-first) left it incomplete.
+    /// A time, node or memory limit stopped the search, or the symbolic strategy's cap on
+    /// geometric alternatives left it incomplete.
     pub const LIMIT: u8 = 2;
     /// Bad input: unreadable or malformed files, unknown names, bad arguments.
     pub const BAD_INPUT: u8 = 3;

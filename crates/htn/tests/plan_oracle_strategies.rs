@@ -271,9 +271,10 @@ fn outcome(problem: &str, strategy: Strategy, crowded: bool) -> Outcome {
     plan(&d, &p, &opts, Some(&mut desk)).unwrap().outcome
 }
 
-/// A strategy that stops because it used up its geometric alternatives has proven
+/// The symbolic strategy, which stops once it used up its geometric alternatives, has proven
 /// nothing, so it reports a limit (exit 2), never "no plan exists". Here a plan exists (the
-/// first book at the back), which only chronological backtracking finds.
+/// first book at the back), which chronological backtracking finds, and geometric-first too:
+/// with no repair budget, through the chronological pass that follows its repairs.
 #[test]
 fn a_capped_strategy_that_fails_reports_a_limit_not_unsolvability() {
     let capped = Outcome::LimitReached {
@@ -281,28 +282,40 @@ fn a_capped_strategy_that_fails_reports_a_limit_not_unsolvability() {
     };
     let p = "desk-both-heavy.hddl";
     assert_eq!(outcome(p, Strategy::Symbolic, false), capped);
-    assert_eq!(outcome(p, Strategy::GeometricFirst { k: 0 }, false), capped);
-    assert!(matches!(
-        outcome(p, Strategy::Chronological, false),
-        Outcome::Found { .. }
-    ));
-}
-
-/// Only a complete search, which tried every geometric solution, may say no plan exists.
-#[test]
-fn only_the_complete_search_proves_unsolvability() {
-    let p = "desk-both-heavy.hddl";
-    assert_eq!(
-        outcome(p, Strategy::Chronological, true),
-        Outcome::Unsolvable
-    );
-    for s in [Strategy::Symbolic, Strategy::GeometricFirst { k: 3 }] {
-        assert_eq!(
-            outcome(p, s, true),
-            Outcome::LimitReached {
-                limit: Limit::GeometricAlternatives
-            },
+    for s in [Strategy::Chronological, Strategy::GeometricFirst { k: 0 }] {
+        assert!(
+            matches!(outcome(p, s, false), Outcome::Found { .. }),
             "{s:?}"
         );
     }
+    let (_, st) = run(p, Strategy::GeometricFirst { k: 0 });
+    assert!(st.chronological_after_repairs);
+}
+
+/// Whatever the repair budget, geometric-first finds the plan of `desk-both-heavy`: by its
+/// repairs when they reach it, else by the chronological pass after them.
+#[test]
+fn geometric_first_is_as_complete_as_chronological() {
+    let p = "desk-both-heavy.hddl";
+    for k in [0, 1, 2, 3] {
+        let (s, st) = run(p, Strategy::GeometricFirst { k });
+        assert!(!s.is_empty(), "k = {k}");
+        assert_eq!(st.chronological_after_repairs, k == 0, "k = {k}");
+    }
+}
+
+/// Only a complete search, which tried every geometric solution, may say no plan exists:
+/// chronological backtracking, or geometric-first once its chronological pass is done.
+#[test]
+fn only_the_complete_search_proves_unsolvability() {
+    let p = "desk-both-heavy.hddl";
+    for s in [Strategy::Chronological, Strategy::GeometricFirst { k: 3 }] {
+        assert_eq!(outcome(p, s, true), Outcome::Unsolvable, "{s:?}");
+    }
+    assert_eq!(
+        outcome(p, Strategy::Symbolic, true),
+        Outcome::LimitReached {
+            limit: Limit::GeometricAlternatives
+        }
+    );
 }

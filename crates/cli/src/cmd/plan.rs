@@ -11,10 +11,10 @@ use crate::exit;
 #[derive(clap::Args)]
 #[command(
     after_help = "Exit codes: 0 plan found; 1 proven unsolvable (the whole search space was \
-                        explored with no cap: with a scene, only --strategy chronological can \
-                        prove it, over every solution the GTP enumerates); 2 stopped incomplete: \
-                        a time, node or memory limit, or the cap on geometric alternatives of \
-                        --strategy symbolic (one per task) or geometric-first (k per repair); \
+                        explored with no cap: with a scene, --strategy chronological or \
+                        geometric-first, over every solution the GTP enumerates); 2 stopped \
+                        incomplete: a time, node or memory limit, or the cap on geometric \
+                        alternatives of --strategy symbolic (one per task); \
                         which one is said on stderr and in the JSON; 3 bad input.\n\nThe plan is checked by the independent \
                         validator before it is printed; it is printed in the competition format \
                         (or as JSON with --json, with search statistics)."

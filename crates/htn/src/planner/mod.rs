@@ -71,8 +71,9 @@ pub enum Strategy {
     /// applies while their preconditions read shared literals), first try up to `k` other
     /// solutions of earlier geometric tasks, newest first, each its share of the `k`, keeping
     /// the HTN choices made since and re-planning the geometric tasks after it; if none makes
-    /// the failed task solvable, fall back to HTN alternatives (the paper's Figure 3). Other
-    /// solutions are tried only this way.
+    /// the failed task solvable, fall back to HTN alternatives (the paper's Figure 3). When the
+    /// search ends with other solutions untried this way, it starts again chronologically, so
+    /// that it is as complete as [`Strategy::Chronological`].
     GeometricFirst { k: usize },
 }
 
@@ -92,8 +93,8 @@ pub enum Limit {
     Time,
     Nodes,
     Memory,
-    /// The strategy's cap on geometric solutions per task (symbolic: one; geometric-first:
-    /// k per repair): every choice within the cap failed, which proves nothing.
+    /// The symbolic strategy's cap of one geometric solution per task: every choice within
+    /// the cap failed, which proves nothing.
     GeometricAlternatives,
 }
 
@@ -165,8 +166,8 @@ pub enum Outcome {
     /// A plan.
     Found { plan: Plan },
     /// The whole search space was explored: no plan exists. Never with [`Strategy::Symbolic`]
-    /// or [`Strategy::GeometricFirst`] once a geometric task was asked: their cap on geometric
-    /// solutions makes the search incomplete ([`Limit::GeometricAlternatives`]).
+    /// once a geometric task was asked: its cap on geometric solutions makes the search
+    /// incomplete ([`Limit::GeometricAlternatives`]).
     Unsolvable,
     /// A limit stopped the search.
     LimitReached { limit: Limit },
@@ -202,6 +203,9 @@ pub struct SearchStats {
     pub geo_repairs_succeeded: u64,
     /// Whether the best-first fallback search ran, and the nodes it expanded (counted in
     /// `nodes` too).
+    /// Geometric-first's repairs were spent without a plan and a chronological pass followed.
+    #[serde(default)]
+    pub chronological_after_repairs: bool,
     #[serde(default)]
     pub best_first: bool,
     #[serde(default)]

@@ -1,9 +1,12 @@
 //! The driver over the engines: depth-first iterations with a doubling depth bound (and one
-//! more without the left-recursion check before calling a problem unsolvable), and the
-//! fallback to the best-first engine after the depth-first one's share of the time limit.
+//! more without the left-recursion check before calling a problem unsolvable), the
+//! chronological pass after geometric-first's repairs are spent, and the fallback to the
+//! best-first engine after the depth-first one's share of the time limit.
 
 use super::super::compile::Compiled;
-use super::super::{Limit, Outcome, PlanError, PlannerOptions, SearchResult, current_rss_kb};
+use super::super::{
+    Limit, Outcome, PlanError, PlannerOptions, SearchResult, Strategy, current_rss_kb,
+};
 use super::limits::drop_in_background;
 use super::{Search, Stop};
 
@@ -50,6 +53,16 @@ impl<'a, 'o> Search<'a, 'o> {
                         self.reset();
                         continue;
                     }
+                    if !self.cutoff && self.repairs_spent() {
+                        // Geometric-first's repairs found nothing: go on chronologically, over
+                        // every geometric solution, so that it is as complete as that strategy.
+                        self.opts.strategy = Strategy::Chronological;
+                        self.geo_capped = false;
+                        self.stats.chronological_after_repairs = true;
+                        self.loop_check = self.opts.loop_check;
+                        self.reset();
+                        continue;
+                    }
                     if !self.cutoff {
                         break if self.geo_capped {
                             Outcome::LimitReached {
@@ -83,6 +96,12 @@ impl<'a, 'o> Search<'a, 'o> {
 }
 
 impl Search<'_, '_> {
+    /// Whether a geometric-first search ended with geometric solutions it never tried (its
+    /// repairs' budget spent): a chronological pass comes next.
+    fn repairs_spent(&self) -> bool {
+        self.geo_capped && matches!(self.opts.strategy, Strategy::GeometricFirst { .. })
+    }
+
     /// "No plan": only when no precondition join gave up at a limit on the way (a join cut
     /// short leaves bindings untried).
     fn unsolvable_or_limit(&self) -> Outcome {
