@@ -15,7 +15,9 @@ use std::path::Path;
 use htn::model::{Domain, Problem};
 use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, SolutionId, StreamId};
 use htn::plan::Plan;
-use htn::planner::{Limit, Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan};
+use htn::planner::{
+    Limit, Limits, Outcome, PlanError, PlannerOptions, SearchStats, Strategy, plan,
+};
 use htn::validate::validate;
 
 const SLOTS: [&str; 2] = ["p1", "p2"];
@@ -131,17 +133,22 @@ fn run(problem: &str, strategy: Strategy) -> (Vec<String>, SearchStats) {
 }
 
 fn run_on(problem: &str, strategy: Strategy, crowded: bool) -> (Vec<String>, SearchStats) {
+    let opts = PlannerOptions {
+        strategy,
+        ..PlannerOptions::default()
+    };
+    run_with(problem, &opts, crowded)
+}
+
+fn run_with(problem: &str, opts: &PlannerOptions, crowded: bool) -> (Vec<String>, SearchStats) {
+    let strategy = opts.strategy;
     let (d, p) = load(problem);
     let mut desk = Desk {
         crowded,
         hiding: problem == "desk-visible.hddl",
         ..Desk::default()
     };
-    let opts = PlannerOptions {
-        strategy,
-        ..PlannerOptions::default()
-    };
-    let r = plan(&d, &p, &opts, Some(&mut desk)).unwrap();
+    let r = plan(&d, &p, opts, Some(&mut desk)).unwrap();
     let Outcome::Found { plan } = r.outcome else {
         panic!("{problem} {strategy:?}: no plan: {:?}", r.outcome)
     };
@@ -302,6 +309,38 @@ fn geometric_first_is_as_complete_as_chronological() {
         assert!(!s.is_empty(), "k = {k}");
         assert_eq!(st.chronological_after_repairs, k == 0, "k = {k}");
     }
+}
+
+/// With a time limit, geometric-first's repairs hand over to the chronological pass after
+/// their share of it: with a share of 1 for the pass, at once, so the plan is chronological's.
+#[test]
+fn geometric_first_hands_over_after_its_share_of_the_time() {
+    let p = "desk-heavy.hddl";
+    let (chrono, _) = run(p, Strategy::Chronological);
+    let opts = PlannerOptions {
+        strategy: Strategy::GeometricFirst { k: 2 },
+        limits: Limits {
+            time: Some(std::time::Duration::from_secs(60)),
+            ..Limits::default()
+        },
+        chronological_share: 1.0,
+        ..PlannerOptions::default()
+    };
+    let (s, st) = run_with(p, &opts, false);
+    assert_eq!(s, chrono);
+    assert!(st.chronological_after_repairs);
+    assert_eq!(st.geo_repairs, 0);
+    // With the default share the repairs have time to find it themselves.
+    let (_, st) = run_with(
+        p,
+        &PlannerOptions {
+            chronological_share: 0.5,
+            ..opts
+        },
+        false,
+    );
+    assert!(!st.chronological_after_repairs);
+    assert_eq!(st.geo_repairs_succeeded, 1);
 }
 
 /// Only a complete search, which tried every geometric solution, may say no plan exists:

@@ -89,6 +89,12 @@ pub struct Args {
     /// plan (0 turns the fallback off, 1 starts with it).
     #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
     pub best_first_share: f64,
+    /// With --strategy geometric-first and --time-limit, on problems with geometric tasks: the
+    /// share of the time left to the chronological pass that follows geometric-first's repairs
+    /// (they hand over when they have used the rest, or earlier when spent; 0: the pass only
+    /// after them)
+    #[arg(long, value_name = "SHARE", default_value_t = 0.5, value_parser = share)]
+    pub chronological_share: f64,
     /// End as soon as stdin closes: `bench-hddl` gives its children a pipe that closes when it
     /// ends, however it ends (a signal, even SIGKILL), so no child outlives it.
     #[arg(long, hide = true)]
@@ -157,6 +163,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         loop_check: !args.no_loop_check,
         goal_guards: !args.no_goal_guards,
         best_first_share: args.best_first_share,
+        chronological_share: args.chronological_share,
         ..PlannerOptions::default()
     };
     if let Some(scene) = &args.scene {

@@ -36,6 +36,11 @@
 //!   added) still hold; else the node is a dead end (Multiarm-Blocksworld's consumed
 //!   `goal_on` markers).
 //!
+//! Geometric-first's chronological pass (`search/driver.rs`): with geometric tasks, the
+//! repairs get the first `1 - chronological_share` of the time limit (all of it without one);
+//! when that is used, or the search ends with geometric solutions untried, it starts again
+//! with chronological backtracking, which tries every solution.
+//!
 //! Fallback (`search/driver.rs`): with a time limit, on a purely symbolic problem, the
 //! depth-first search gets the first `1 - best_first_share` of the time; if it has found no
 //! plan by then, a weighted best-first progression search (`search/bfs.rs`, as pandaPI's)
@@ -134,6 +139,12 @@ pub struct PlannerOptions {
     /// plan. 0 turns the fallback off; without a time limit there is none.
     #[serde(default = "default_best_first_share")]
     pub best_first_share: f64,
+    /// With [`Strategy::GeometricFirst`] and a time limit, on a problem with geometric tasks:
+    /// the share of the time limit left to the chronological pass; geometric-first's repairs
+    /// hand over when they have used the rest without a plan (or earlier, when they are
+    /// spent). 0 gives the repairs all the time (the pass only after them).
+    #[serde(default = "default_chronological_share")]
+    pub chronological_share: f64,
 }
 
 fn default_true() -> bool {
@@ -142,6 +153,10 @@ fn default_true() -> bool {
 
 fn default_best_first_share() -> f64 {
     0.8
+}
+
+fn default_chronological_share() -> f64 {
+    0.5
 }
 
 impl Default for PlannerOptions {
@@ -155,6 +170,7 @@ impl Default for PlannerOptions {
             loop_check: true,
             goal_guards: true,
             best_first_share: default_best_first_share(),
+            chronological_share: default_chronological_share(),
         }
     }
 }

@@ -41,7 +41,7 @@ mod limits;
 mod relevance;
 mod repair;
 
-use driver::fallback_time;
+use driver::{fallback_time, repairs_time};
 use frames::{ChoiceStack, Frame, GeoFrame, HtnFrame, Key};
 use limits::{set_growth, table_growth, vec_growth};
 use relevance::{MaskTable, MayAchieve, WILD};
@@ -224,7 +224,7 @@ impl<'a, 'o> Search<'a, 'o> {
             may_memo: Vec::new(),
             masks,
             lifted_masks,
-            switch_at: fallback_time(c, opts),
+            switch_at: fallback_time(c, opts).or_else(|| repairs_time(c, opts)),
             stats: SearchStats {
                 guarded_goals: guards.as_ref().map_or(0, guard::Guards::count),
                 ..SearchStats::default()

@@ -33,6 +33,11 @@ impl<'a, 'o> Search<'a, 'o> {
                     };
                 }
                 Stop::Limit(l) => break Outcome::LimitReached { limit: l },
+                Stop::Switch if matches!(self.opts.strategy, Strategy::GeometricFirst { .. }) => {
+                    self.switch_at = None;
+                    self.go_chronological();
+                    continue;
+                }
                 Stop::Switch => {
                     self.switch_at = None;
                     break match self.best_first() {
@@ -56,11 +61,7 @@ impl<'a, 'o> Search<'a, 'o> {
                     if !self.cutoff && self.repairs_spent() {
                         // Geometric-first's repairs found nothing: go on chronologically, over
                         // every geometric solution, so that it is as complete as that strategy.
-                        self.opts.strategy = Strategy::Chronological;
-                        self.geo_capped = false;
-                        self.stats.chronological_after_repairs = true;
-                        self.loop_check = self.opts.loop_check;
-                        self.reset();
+                        self.go_chronological();
                         continue;
                     }
                     if !self.cutoff {
@@ -102,6 +103,16 @@ impl Search<'_, '_> {
         self.geo_capped && matches!(self.opts.strategy, Strategy::GeometricFirst { .. })
     }
 
+    /// Starts the chronological pass that follows geometric-first's repairs.
+    fn go_chronological(&mut self) {
+        self.opts.strategy = Strategy::Chronological;
+        self.geo_capped = false;
+        self.stats.chronological_after_repairs = true;
+        self.loop_check = self.opts.loop_check;
+        self.switch_at = None;
+        self.reset();
+    }
+
     /// "No plan": only when no precondition join gave up at a limit on the way (a join cut
     /// short leaves bindings untried).
     fn unsolvable_or_limit(&self) -> Outcome {
@@ -124,4 +135,18 @@ pub(super) fn fallback_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::
         return None;
     }
     Some(t.mul_f64(1.0 - opts.best_first_share))
+}
+
+/// When geometric-first's repairs hand over to the chronological pass: after their share of
+/// the time limit, on problems with geometric tasks.
+pub(super) fn repairs_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::time::Duration> {
+    let t = opts.limits.time?;
+    let share = opts.chronological_share;
+    if !matches!(opts.strategy, Strategy::GeometricFirst { .. })
+        || !(share > 0.0 && share <= 1.0)
+        || !c.actions.iter().any(|a| a.evaluable.is_some())
+    {
+        return None;
+    }
+    Some(t.mul_f64(1.0 - share))
 }
