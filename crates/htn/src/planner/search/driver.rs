@@ -142,11 +142,9 @@ pub(super) fn fallback_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::
 pub(super) fn repairs_time(c: &Compiled, opts: &PlannerOptions) -> Option<std::time::Duration> {
     let t = opts.limits.time?;
     let share = opts.chronological_share;
-    if !matches!(opts.strategy, Strategy::GeometricFirst { .. })
-        || !(share > 0.0 && share <= 1.0)
-        || !c.actions.iter().any(|a| a.evaluable.is_some())
-    {
-        return None;
-    }
-    Some(t.mul_f64(1.0 - share))
+    let applies = matches!(opts.strategy, Strategy::GeometricFirst { .. })
+        && share > 0.0
+        && share <= 1.0
+        && c.actions.iter().any(|a| a.evaluable.is_some());
+    applies.then(|| t.mul_f64(1.0 - share))
 }
