@@ -32,8 +32,9 @@ pub struct Args {
     /// Stop after expanding this many search nodes.
     #[arg(long, value_name = "N")]
     pub node_limit: Option<u64>,
-    /// Stop when the process's resident memory exceeds this many MiB (checked every 10 ms
-    /// of search).
+    /// Stop when the process's resident memory exceeds this many MiB (read every 2 ms in every
+    /// phase: reading, compiling, searching, validating; the check keeps 1/32 of it as
+    /// headroom).
     #[arg(long, value_name = "MB", default_value_t = DEFAULT_MEMORY_LIMIT_MB,
           value_parser = clap::value_parser!(u64).range(1..))]
     pub memory_limit: u64,
