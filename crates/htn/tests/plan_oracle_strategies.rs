@@ -41,6 +41,8 @@ struct Desk {
     crowded: bool,
     /// Nothing blocks, but a book on `p1` hides a book on `p2` (shared literal `visible`).
     hiding: bool,
+    /// How long each solution takes to compute, as a real GTP's do.
+    delay: std::time::Duration,
 }
 
 impl GeometricOracle for Desk {
@@ -55,6 +57,7 @@ impl GeometricOracle for Desk {
         Ok(StreamId(self.next_id))
     }
     fn next_solution(&mut self, s: StreamId) -> Result<Option<GeoSolution>, OracleError> {
+        std::thread::sleep(self.delay);
         let (book, opened_in, pos) = self.streams.get_mut(&s.0).expect("an open stream");
         // Stack discipline: a stream is asked only in the world it was opened in.
         assert_eq!(*opened_in, self.world, "stream asked in another world");
@@ -341,6 +344,35 @@ fn geometric_first_hands_over_after_its_share_of_the_time() {
     );
     assert!(!st.chronological_after_repairs);
     assert_eq!(st.geo_repairs_succeeded, 1);
+}
+
+/// The handover to the chronological pass may fall due in the middle of a repair (here, on a
+/// crowded desk, the repair that moves the first book back, with solutions that take 15 ms):
+/// it waits for the repair to end, and the plan is found whenever it comes.
+#[test]
+fn the_handover_during_a_repair_waits_for_it() {
+    for share in [0.94, 0.95, 0.96, 0.97, 0.98] {
+        let (d, p) = load("desk-light.hddl");
+        let mut desk = Desk {
+            crowded: true,
+            delay: std::time::Duration::from_millis(15),
+            ..Desk::default()
+        };
+        let opts = PlannerOptions {
+            strategy: Strategy::GeometricFirst { k: 3 },
+            limits: Limits {
+                time: Some(std::time::Duration::from_secs(1)),
+                ..Limits::default()
+            },
+            chronological_share: share,
+            ..PlannerOptions::default()
+        };
+        let r = plan(&d, &p, &opts, Some(&mut desk)).unwrap();
+        let Outcome::Found { plan } = r.outcome else {
+            panic!("share {share}: {:?}", r.outcome)
+        };
+        validate(&d, &p, &plan, &[]).unwrap();
+    }
 }
 
 /// Only a complete search, which tried every geometric solution, may say no plan exists:

@@ -26,7 +26,10 @@ impl<'a, 'o> Search<'a, 'o> {
             if let Some(l) = self.check_limits() {
                 return Ok(Stop::Limit(l));
             }
+            // A handover waits for a repair in progress to end: the repair's state names the
+            // frames the next engine's reset pops.
             if let Some(t) = self.switch_at
+                && self.mode == Mode::Normal
                 && self.start.elapsed() >= t
             {
                 return Ok(Stop::Switch);

@@ -105,6 +105,9 @@ impl Search<'_, '_> {
 
     /// Starts the chronological pass that follows geometric-first's repairs.
     fn go_chronological(&mut self) {
+        // The handover may come in the middle of a repair: its candidates name frames that
+        // the reset pops.
+        self.end_repair();
         self.opts.strategy = Strategy::Chronological;
         self.geo_capped = false;
         self.stats.chronological_after_repairs = true;
