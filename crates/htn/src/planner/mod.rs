@@ -111,7 +111,7 @@ impl std::fmt::Display for Limit {
             Limit::Memory => "memory limit",
             Limit::GeometricAlternatives => {
                 "strategy's cap on geometric alternatives (not a proof that no plan exists: \
-                 --strategy chronological tries every geometric solution)"
+                 --strategy chronological or geometric-first tries every geometric solution)"
             }
         })
     }
