@@ -1,7 +1,8 @@
 //! The driver over the engines: depth-first iterations with a doubling depth bound (and one
 //! more without the left-recursion check before calling a problem unsolvable), the
-//! chronological pass after geometric-first's repairs are spent, and the fallback to the
-//! best-first engine after the depth-first one's share of the time limit.
+//! chronological pass after geometric-first's repairs (when they are spent or have used their
+//! share of the time limit), and the fallback to the best-first engine after the depth-first
+//! one's share of the time limit.
 
 use super::super::compile::Compiled;
 use super::super::{
