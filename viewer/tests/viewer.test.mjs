@@ -4,14 +4,16 @@
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn, spawnSync } from 'node:child_process';
-import { readFileSync } from 'node:fs';
-import { join } from 'node:path';
+import { mkdirSync, readFileSync } from 'node:fs';
+import { dirname, join } from 'node:path';
 import { DIST, VIEWER, launch, open, serve } from './harness.mjs';
 
 const PLAN_FILE = process.env.HTNGTP_PLAN ?? join(VIEWER, 'fixtures', 'sample-plan.json');
 const PLAN_TEXT = readFileSync(PLAN_FILE, 'utf8');
 const PLAN = JSON.parse(PLAN_TEXT);
-const SCREENSHOT = join(VIEWER, 'screenshot.png');
+// The picture the tests take goes under target/ (tests leave the checkout as it was);
+// HTNGTP_SCREENSHOT=viewer/screenshot.png refreshes the README's picture.
+const SCREENSHOT = process.env.HTNGTP_SCREENSHOT ?? join(VIEWER, '..', 'target', 'viewer-screenshot.png');
 
 /** A copy of the plan with `edit` applied, as JSON text. */
 function variant(edit) {
@@ -300,6 +302,7 @@ describe('the sample plan', () => {
       await hook(page, ([a, b, c]) => __htngtp.seekFrame(a, b, c), [k, j, Math.floor(trs[j].frames.length * 0.6)]);
     }
     await page.waitForTimeout(200);
+    mkdirSync(dirname(SCREENSHOT), { recursive: true });
     await page.screenshot({ path: SCREENSHOT });
     assert.equal(await hook(page, () => __htngtp.currentStep), k);
   });
