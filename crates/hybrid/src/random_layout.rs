@@ -35,7 +35,7 @@ use geometry::facts::{FactParams, on, reachable_effort};
 use geometry::perception::{reach_origins, within_reach};
 use geometry::scene::{AgentId, AgentKind, ObjectId, pose_from_xyz_rpy};
 use geometry::world::{BodyOwner, World, base_pose};
-use gtp::planner::{CallOptions, Planner};
+use gtp::planner::{CallOptions, Planner, PlannerConfig};
 use parry3d::math::{Pose, Vector};
 use serde::Serialize;
 
@@ -63,8 +63,17 @@ pub(crate) const CLEARANCE: f32 = 0.02;
 const PERSON_CLEARANCE: f32 = 0.05;
 /// Base poses `navigate-to` must each let the robot pick an object the domain drives to.
 const NAVIGATE_POSES: usize = 3;
-/// Time limit of one GTP check (pick, navigate-to).
+/// Time limit of one GTP check (pick, navigate-to): a safety net far above what a check takes.
 const CHECK_LIMIT: Duration = Duration::from_secs(20);
+
+/// The planner of a generator's GTP checks: its trajectory queries end at their node cap, not
+/// at the default half-second of wall-clock time, so that a seed gives the same layout however
+/// loaded the machine is.
+pub(crate) fn check_planner() -> Planner {
+    let mut config = PlannerConfig::default();
+    config.rrt.time_limit = CHECK_LIMIT;
+    Planner::with_config(config)
+}
 
 /// What a random layout keeps and where it serves.
 #[derive(Clone, Debug)]
@@ -235,7 +244,7 @@ impl RandomLayouts {
             source,
             world,
             rules,
-            planner: Arc::new(Planner::new()),
+            planner: Arc::new(check_planner()),
         })
     }
 

@@ -397,7 +397,7 @@ impl RandomRooms {
             source,
             start,
             rules,
-            planner: Arc::new(Planner::new()),
+            planner: Arc::new(crate::random_layout::check_planner()),
         })
     }
 
