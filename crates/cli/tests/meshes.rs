@@ -1,6 +1,6 @@
-//! URDF meshes through the built binary: a robot whose links collide as STL, COLLADA and OBJ
-//! meshes loads, and each kind of bad mesh is one clear line (file, element, what is wrong)
-//! with exit 3.
+//! Robot descriptions through the built binary: a robot whose links collide as STL, COLLADA and
+//! OBJ meshes loads, an SRDF posture starts it, and each kind of bad mesh, SRDF or URDF tree is
+//! one clear line (file, element, what is wrong) with exit 3.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

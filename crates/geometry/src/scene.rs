@@ -321,9 +321,9 @@ pub struct AgentSpecResolved {
     pub srdf: Option<PathBuf>,
     /// Base pose on the floor: x, y (metres), yaw (radians).
     pub base: [f32; 3],
-    /// Joint values by name, as written.
     /// The SRDF posture (`group_state` name) the agent starts in, before `joints`.
     pub posture: Option<String>,
+    /// Joint values by name, as written.
     pub joints: Vec<(String, f32)>,
     /// Link whose frame is the eye / camera (x forward, z up).
     pub eye: Option<String>,
