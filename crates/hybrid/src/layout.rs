@@ -2,7 +2,7 @@
 //! and free spots on support surfaces, for the scale benchmark ([`crate::scale`]) and the
 //! randomized layouts of `bench library --layout random`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use geometry::scene::{ObjectId, Scene};
 use geometry::world::World;
@@ -36,6 +36,35 @@ pub enum NewShape {
         radius: f32,
         half_height: f32,
     },
+}
+
+/// A scene file read for a generator: its text with absolute file paths (so that the scenes
+/// made from it load from anywhere), its folder, its name for messages, and its world.
+pub(crate) struct LoadedScene {
+    pub text: SceneText,
+    pub base_dir: PathBuf,
+    pub source: String,
+    pub world: World,
+}
+
+impl LoadedScene {
+    /// Reads the scene file `scene` and builds its world.
+    pub(crate) fn read(scene: &Path) -> Result<LoadedScene, String> {
+        let mut text = SceneText::load(scene)?;
+        let base_dir = scene
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        text.absolute_paths(&base_dir);
+        let source = scene.display().to_string();
+        let world = text.world(&source, &base_dir)?;
+        Ok(LoadedScene {
+            text,
+            base_dir,
+            source,
+            world,
+        })
+    }
 }
 
 impl SceneText {

@@ -39,7 +39,7 @@ use gtp::planner::{CallOptions, Planner, PlannerConfig};
 use parry3d::math::{Pose, Vector};
 use serde::Serialize;
 
-use crate::layout::{Footprints, SceneText, Surface, surfaces};
+use crate::layout::{Footprints, LoadedScene, SceneText, Surface, surfaces};
 
 /// Whole-layout attempts before a seed is given up.
 pub const LAYOUT_ATTEMPTS: usize = 12;
@@ -226,14 +226,12 @@ pub(crate) const BOX_FACES: [(&str, [f32; 2]); 3] = [
 impl RandomLayouts {
     /// The generator for the scene file `scene`.
     pub fn new(scene: &Path, rules: LayoutRules) -> Result<RandomLayouts, String> {
-        let mut text = SceneText::load(scene)?;
-        let base_dir = scene
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_else(|| PathBuf::from("."));
-        text.absolute_paths(&base_dir);
-        let source = scene.display().to_string();
-        let world = text.world(&source, &base_dir)?;
+        let LoadedScene {
+            text,
+            base_dir,
+            source,
+            world,
+        } = LoadedScene::read(scene)?;
         if world.object_id(&rules.counter).is_none() {
             return Err(format!("{source}: no counter `{}`", rules.counter));
         }

@@ -43,7 +43,9 @@ use gtp::planner::Planner;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::{Cuboid, Shape};
 
-use crate::layout::{Footprints, NewFurniture, NewObject, NewShape, SceneText, Surface, surfaces};
+use crate::layout::{
+    Footprints, LoadedScene, NewFurniture, NewObject, NewShape, SceneText, Surface, surfaces,
+};
 use crate::random_layout::{
     FurniturePlacement, Layout, LayoutRules, LayoutSummary, ObjectPlacement, PersonPlacement,
     Placer, SHARED_PATCH_POINTS, base_xyyaw, movable, person_is_free, rests_free,
@@ -351,14 +353,12 @@ impl RandomRooms {
     /// have a robot, a person and a fixed object named `chair`, the seat copied for every
     /// chair of a room).
     pub fn new(scene: &Path, rules: RoomRules) -> Result<RandomRooms, String> {
-        let mut text = SceneText::load(scene)?;
-        let base_dir = scene
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_else(|| PathBuf::from("."));
-        text.absolute_paths(&base_dir);
-        let source = scene.display().to_string();
-        let start = text.world(&source, &base_dir)?;
+        let LoadedScene {
+            mut text,
+            base_dir,
+            source,
+            world: start,
+        } = LoadedScene::read(scene)?;
         if !start
             .agent_ids()
             .any(|a| start.agent(a).kind() == AgentKind::Robot)

@@ -34,7 +34,10 @@ use std::time::{Duration, Instant};
 
 use htn::model::{Domain, Problem, SourceName};
 
+#[path = "../mesh_support/mod.rs"]
+mod mesh_support;
 mod mutate;
+use mesh_support::{ascii_stl, binary_stl, box_triangles};
 pub use mutate::mutate;
 
 // ---------------------------------------------------------------------------------------------
@@ -421,23 +424,9 @@ fn mesh_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
             });
         }
     }
-    let cube = cube_triangles();
-    let mut binary = vec![0u8; 80];
-    binary.extend_from_slice(&(cube.len() as u32).to_le_bytes());
-    let mut ascii = String::from("solid cube\n");
-    for t in &cube {
-        binary.extend_from_slice(&[0u8; 12]);
-        ascii.push_str(" facet normal 0 0 0\n  outer loop\n");
-        for v in t {
-            for c in v {
-                binary.extend_from_slice(&c.to_le_bytes());
-            }
-            ascii.push_str(&format!("   vertex {} {} {}\n", v[0], v[1], v[2]));
-        }
-        binary.extend_from_slice(&[0u8; 2]);
-        ascii.push_str("  endloop\n endfacet\n");
-    }
-    ascii.push_str("endsolid cube\n");
+    let cube = box_triangles([0.0; 3], [1.0; 3]);
+    let binary = binary_stl(&cube, cube.len() as u32);
+    let ascii = ascii_stl(&cube);
     let corners: Vec<String> = (0..8)
         .map(|i| format!("{} {} {}", i & 1, (i >> 1) & 1, (i >> 2) & 1))
         .collect();
@@ -457,23 +446,6 @@ fn mesh_seeds(root: &Path, shared: bool, seeds: &mut Vec<Seed>) {
             target: Target::Mesh,
         });
     }
-}
-
-/// The 12 triangles of the unit cube, outward.
-fn cube_triangles() -> Vec<[[f32; 3]; 3]> {
-    let c = |i: usize| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32];
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    quads
-        .iter()
-        .flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]])
-        .collect()
 }
 
 /// The model of the URDF at `path`, its `package://` names searched in `packages`.

@@ -35,7 +35,6 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
                 Stop::Limit(l) => break Outcome::LimitReached { limit: l },
                 Stop::Switch if matches!(self.opts.strategy, Strategy::GeometricFirst { .. }) => {
-                    self.switch_at = None;
                     self.go_chronological();
                     continue;
                 }
