@@ -39,12 +39,14 @@ use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
 pub mod convex;
+pub mod frames;
 mod loader;
 pub mod packages;
 pub mod srdf;
 mod xml;
 
 pub use convex::ConvexMode;
+pub use frames::ExtraFrame;
 pub use packages::PackagePath;
 pub use srdf::Semantics;
 

@@ -181,9 +181,25 @@ struct BaseSpec {
     x: f32,
     #[serde(default)]
     y: f32,
+    /// Height of the URDF's root above the floor (a robot fixed to a table), metres.
+    #[serde(default)]
+    z: f32,
     /// Degrees.
     #[serde(default)]
     yaw: f32,
+}
+
+/// A fixed frame added to the agent's URDF: a tool centre point, a camera.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct FrameSpec {
+    name: String,
+    parent: String,
+    #[serde(default)]
+    xyz: [f32; 3],
+    /// Roll, pitch, yaw in degrees.
+    #[serde(default)]
+    rpy: [f32; 3],
 }
 
 #[derive(Deserialize, Debug)]
@@ -219,6 +235,9 @@ struct AgentSpec {
     /// Links whose collision meshes are decomposed into convex pieces, whatever the rule says.
     #[serde(default)]
     decompose_links: Vec<String>,
+    /// Fixed frames added to the URDF (what the description lacks: a tool frame, a camera).
+    #[serde(default)]
+    frames: Vec<FrameSpec>,
 }
 
 /// Optional overrides of an agent's effort parameters (see [`crate::effort::EffortParams`]).
@@ -321,6 +340,10 @@ pub struct AgentSpecResolved {
     pub srdf: Option<PathBuf>,
     /// Base pose on the floor: x, y (metres), yaw (radians).
     pub base: [f32; 3],
+    /// Height of the URDF's root above the base pose (a robot fixed to a table), metres.
+    pub mount_height: f32,
+    /// Fixed frames added to the URDF (see [`crate::agent::frames`]).
+    pub frames: Vec<crate::agent::ExtraFrame>,
     /// The SRDF posture (`group_state` name) the agent starts in, before `joints`.
     pub posture: Option<String>,
     /// Joint values by name, as written.
@@ -626,6 +649,12 @@ fn agent_spec(
         None => Some(urdf.with_extension("srdf")).filter(|p| p.is_file()),
     };
     ck.finite(&[a.base.yaw], &format!("{at}.base.yaw"))?;
+    if !(a.base.z.is_finite() && (0.0..=3.0).contains(&a.base.z)) {
+        return Err(ck.err(
+            &format!("{at}.base.z"),
+            format!("{} is outside 0 ..= 3 m", a.base.z),
+        ));
+    }
     ck.coords(&[a.base.x, a.base.y], &format!("{at}.base"))?;
     for (j, v) in &a.joints {
         if !v.is_finite() {
@@ -668,6 +697,8 @@ fn agent_spec(
         urdf,
         srdf,
         base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
+        mount_height: a.base.z,
+        frames: extra_frames(ck, a, at)?,
         posture: a.posture.clone(),
         joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
         eye: a.eye.clone(),
@@ -683,6 +714,35 @@ fn agent_spec(
         effort,
         convex_modes: convex_modes(ck, a, at)?,
     })
+}
+
+/// The agent's `frames`, checked: finite offsets within a few metres.
+fn extra_frames(
+    ck: &Checker,
+    a: &AgentSpec,
+    at: &str,
+) -> Result<Vec<crate::agent::ExtraFrame>, SceneError> {
+    a.frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let at = format!("{at}.frames[{i}]");
+            ck.finite(&f.rpy, &format!("{at}.rpy"))?;
+            ck.finite(&f.xyz, &format!("{at}.xyz"))?;
+            if f.xyz.iter().any(|v| v.abs() > 5.0) {
+                return Err(ck.err(
+                    &format!("{at}.xyz"),
+                    format!("{:?}: a frame lies within 5 m of its parent link", f.xyz),
+                ));
+            }
+            Ok(crate::agent::ExtraFrame {
+                name: f.name.clone(),
+                parent: f.parent.clone(),
+                xyz: f.xyz,
+                rpy: f.rpy.map(f32::to_radians),
+            })
+        })
+        .collect()
 }
 
 /// The links a scene names in `hull_links` and `decompose_links` (in neither twice).

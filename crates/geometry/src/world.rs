@@ -223,12 +223,15 @@ impl World {
                 },
                 modes: spec.convex_modes.iter().cloned().collect(),
             };
-            let model = AgentModel::from_urdf_str_with(
+            let text = crate::agent::frames::add_frames(
                 &read_model(&spec.urdf, &scene, &at)?,
-                &spec.urdf.display().to_string(),
-                &meshes,
+                &spec.frames,
+                spec.mount_height,
             )
-            .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            .map_err(|e| scene.error(&format!("{at}.frames"), e))?;
+            let model =
+                AgentModel::from_urdf_str_with(&text, &spec.urdf.display().to_string(), &meshes)
+                    .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
             for (link, _) in &spec.convex_modes {
                 if model.link_id(link).is_err() {
                     return Err(scene.error(
