@@ -61,6 +61,16 @@ impl BaseMoves {
         {
             return None;
         }
+        // The agent's own limits (a robot fixed to a table neither turns nor steps).
+        let limits = &search.world.agent(search.setup.agent).effort;
+        let radius = if effort >= 4 {
+            STEP_RADIUS.min(limits.move_radius)
+        } else {
+            0.0
+        };
+        if radius == 0.0 && limits.base_turn == 0.0 {
+            return None;
+        }
         let nav = stance_task(search)?;
         let mut c = search.c.clone();
         c.time_limit = search.c.time_limit.checked_sub(search.elapsed)?;
@@ -74,7 +84,7 @@ impl BaseMoves {
         )
         .ok()?;
         // Level 2 turns the base in place; level 4 steps too.
-        stances.stance_radius = Some(if effort >= 4 { STEP_RADIUS } else { 0.0 });
+        stances.stance_radius = Some(radius);
         Some(BaseMoves {
             stances,
             here: None,

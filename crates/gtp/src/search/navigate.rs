@@ -37,6 +37,13 @@ impl Search {
     pub(super) fn next_navigation(&mut self) -> Option<Solution> {
         let began = Instant::now();
         let robot = self.setup.agent;
+        if self.stance_radius.is_none() && self.world.agent(robot).effort.move_radius == 0.0 {
+            return self.fail(Failure::at(
+                Stage::Reach,
+                "the robot's base is fixed (its effort's move_radius is 0): it does not drive"
+                    .into(),
+            ));
+        }
         let target = match self.task.target_object {
             Some(o) => ReachTarget::object(&self.world, o),
             None => ReachTarget::Point(self.task.target_point?),
@@ -137,7 +144,8 @@ impl Search {
         let robot = self.setup.agent;
         let cur = self.world.agent_state(robot).base.translation;
         if let Some(radius) = self.stance_radius {
-            return nearby_candidates(target, self.world.agent_state(robot).base, radius);
+            let turns = self.world.agent(robot).effort.base_turn > 0.0;
+            return nearby_candidates(target, self.world.agent_state(robot).base, radius, turns);
         }
         let mut cands = target.base_positions(cur);
         let [sx, sy, _] = self.world.agent(robot).spec.base;
@@ -258,16 +266,16 @@ impl Search {
     }
 }
 
-/// The base poses of a base move inside a task: turning in place to face the target (unless
-/// the base faces it already), then the positions around the target within `radius` of the
-/// base, nearest first.
-fn nearby_candidates(target: &ReachTarget, base: Pose, radius: f32) -> Vec<Vector> {
+/// The base poses of a base move inside a task: turning in place to face the target (when
+/// `turns` allows it and the base does not face it already), then the positions around the
+/// target within `radius` of the base, nearest first.
+fn nearby_candidates(target: &ReachTarget, base: Pose, radius: f32, turns: bool) -> Vec<Vector> {
     let cur = Vector::new(base.translation.x, base.translation.y, 0.0);
     let aim = target.nearest(cur) - cur;
     let facing = base.rotation * Vector::X;
     let turn = crate::rrt::wrap(aim.y.atan2(aim.x) - facing.y.atan2(facing.x));
     let mut out = Vec::new();
-    if turn.abs() > 5f32.to_radians() {
+    if turns && turn.abs() > 5f32.to_radians() {
         out.push(cur);
     }
     out.extend(
