@@ -66,7 +66,8 @@ pub struct Grasp {
     pub id: usize,
     /// Pose of the tool frame in the object's frame.
     pub tool_in_object: Pose,
-    /// Distance between the two contacts: the jaw opening when closed on the object.
+    /// The jaw opening when closed on the object: the contacts' distance, or wider where the
+    /// fingers meet the object before the contacts (see [`closed_width`]).
     pub width: f32,
     /// Jaw opening while approaching (width plus clearance, at most the maximum opening).
     pub opening: f32,
@@ -175,10 +176,15 @@ pub fn generate_grasps(
                 colliding += 1;
                 continue;
             }
+            let closed = closed_width(gripper, &tool, shape, width, opening);
+            if closed > width + MAX_CLOSING_SLACK {
+                colliding += 1;
+                continue;
+            }
             candidates.push(Grasp {
                 id: 0,
                 tool_in_object: tool,
-                width,
+                width: closed,
                 opening,
                 score,
             });
@@ -212,6 +218,39 @@ pub fn generate_grasps(
         antipodal_pairs: pairs,
         colliding,
     })
+}
+
+/// How much wider than the contacts' distance a grasp's jaws may stay closed (metres): a
+/// closing axis tilted so far that the fingers meet the object's edges sooner (a flat pad
+/// across a flat face) does not hold it by its contacts, and is dropped.
+const MAX_CLOSING_SLACK: f32 = 0.004;
+
+/// The jaw opening at which the fingers, closing on `shape` with the tool at `tool`, stop:
+/// `width` (the contacts' distance) when the gripper's boxes clear the object there, else the
+/// narrowest opening up to `opening` (where they clear) at which they do, to 0.1 mm. Closing
+/// across a tilted axis (inside the friction cone), a flat pad meets a box's edge before
+/// the contact point: held at `width`, it would stand millimetres inside the object.
+fn closed_width(
+    gripper: &GripperModel,
+    tool: &Pose,
+    shape: &dyn Shape,
+    width: f32,
+    opening: f32,
+) -> f32 {
+    let clear = |w: f32| !gripper.at(w).intersects(tool, shape, &Pose::IDENTITY);
+    if clear(width) {
+        return width;
+    }
+    let (mut lo, mut hi) = (width, opening);
+    while hi - lo > 1e-4 {
+        let mid = 0.5 * (lo + hi);
+        if clear(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 /// The centre of mass of a shape of uniform density (the AABB centre when the shape has no
@@ -471,16 +510,29 @@ mod tests {
             assert_eq!(g.id, i);
             assert!(g.width <= 0.09 && g.opening <= 0.09);
             assert!(g.opening >= g.width);
-            // The contacts lie on the surface along the tool's y axis, normals in the cone.
+            // The contacts lie on the surface along the tool's y axis, within the closed jaws,
+            // the centre between them.
             let y = g.tool_in_object.rotation * Vector::Y;
             let c = g.tool_in_object.translation;
-            for side in [-1.0f32, 1.0] {
-                let p = c + y * side * g.width / 2.0;
-                let proj = shape.project_local_point(p, false);
-                assert!((proj.point - p).length() < 2e-3, "contact off the surface");
+            let exits: Vec<f32> = [-1.0f32, 1.0]
+                .iter()
+                .map(|&side| {
+                    let far = c + y * side * 0.1;
+                    let hit = shape.cast_local_ray(&Ray::new(far, -y * side), 0.1, true);
+                    0.1 - hit.expect("the surface across the jaws")
+                })
+                .collect();
+            assert!((exits[0] - exits[1]).abs() < 2e-3, "off centre: {exits:?}");
+            assert!(
+                exits[0] + exits[1] <= g.width + 2e-3,
+                "{exits:?} {}",
+                g.width
+            );
+            // Neither open nor closed does the gripper enter the object.
+            for w in [g.opening, g.width] {
+                let gripper = pr2_gripper().at(w);
+                assert!(!gripper.intersects(&g.tool_in_object, shape, &Pose::IDENTITY));
             }
-            let gripper = pr2_gripper().at(g.opening);
-            assert!(!gripper.intersects(&g.tool_in_object, shape, &Pose::IDENTITY));
         }
         for w in set.grasps.windows(2) {
             assert!(w[0].score <= w[1].score);
