@@ -43,6 +43,8 @@ pub struct AgentInfo {
     pub reach: f32,
     /// What each effort level allows this agent to do.
     pub effort: EffortParams,
+    /// The configuration the scene starts the agent in (its posture and joints).
+    pub initial_q: Vec<f32>,
 }
 
 impl AgentInfo {
@@ -348,7 +350,7 @@ impl World {
             let link_poses = model.link_poses(base, &q);
             states.push(AgentState {
                 base,
-                q,
+                q: q.clone(),
                 link_poses,
             });
             infos.push(AgentInfo {
@@ -360,6 +362,7 @@ impl World {
                 fov,
                 reach,
                 effort,
+                initial_q: q,
             });
         }
         let poses = scene.initial_poses.clone();

@@ -57,6 +57,8 @@ pub enum Phase {
     Return,
     /// The robot's base driving on the floor (navigate-to).
     Drive,
+    /// A person's other arm moved out of the way, to rest, before a take's reach.
+    Clear,
     /// A person's hand out to an object the robot holds out (take; shown, not planned).
     Reach,
     /// The person's hand back with the object taken (take; shown, not planned).

@@ -85,6 +85,101 @@ pub fn plan_take(
     })
 }
 
+/// The person's other arms (all but `arm`, holding nothing) moved to rest in `before`, the
+/// robot holding `object` out: to where the scene started them, else to the model's default
+/// configuration (arms hanging), the first of those it is not at that is free and that a
+/// collision-free path reaches. Each arm's path, and `before` and `after` with the arms there;
+/// the error says why an arm cannot move, or that none can.
+pub fn rest_other_arms(
+    person: &RobotSetup,
+    arm: usize,
+    before: &World,
+    after: &World,
+    object: ObjectId,
+    rrt: &RrtParams,
+    rng: &mut fastrand::Rng,
+) -> Result<RestedArms, String> {
+    let h = person.agent;
+    let rests = [
+        before.agent(h).initial_q.clone(),
+        person.model.default_configuration().into_vec(),
+    ];
+    let busy: Vec<usize> = robot::in_grippers(before, person)
+        .map(|(_, a, _)| a.tool_link)
+        .collect();
+    let (mut b, mut a) = (before.clone(), after.clone());
+    let mut moves = Vec::new();
+    for (k, other) in person.arms.iter().enumerate() {
+        if k == arm || busy.contains(&other.tool_link) {
+            continue;
+        }
+        let from = robot::arm_values(other, &b.agent_state(h).q);
+        let at = |to: &[f32]| from.iter().zip(to).all(|(x, y)| (x - y).abs() < 1e-3);
+        let targets: Vec<Vec<f32>> = rests
+            .iter()
+            .map(|r| robot::arm_values(other, r))
+            .filter(|t| !at(t))
+            .collect();
+        if targets.is_empty() {
+            continue;
+        }
+        let m = arm_motion_among(person, k, &b, &[], None, object)?;
+        let (path, to) = rest_path(&m, &from, targets, rrt, rng)
+            .map_err(|e| format!("the {} cannot move out of the way: {e}", other.name))?;
+        for w in [&mut b, &mut a] {
+            let mut q = w.agent_state(h).q.clone();
+            robot::set_arm_values(other, &mut q, &to);
+            let base = w.agent_state(h).base;
+            w.set_agent_config(h, base, &q);
+        }
+        moves.push((k, path));
+    }
+    if moves.is_empty() {
+        return Err("the other arms are at rest already".into());
+    }
+    Ok(RestedArms {
+        moves,
+        before: b,
+        after: a,
+    })
+}
+
+/// Paths of a person's arms: each arm's index in the person's setup and its path.
+pub type ArmPaths = Vec<(usize, JointPath)>;
+
+/// Arms moved out of the way ([`rest_other_arms`]).
+pub struct RestedArms {
+    /// Each arm moved and its path.
+    pub moves: ArmPaths,
+    /// The world before the take with the arms at rest.
+    pub before: World,
+    /// The world after the take with the arms at rest.
+    pub after: World,
+}
+
+/// The path from `from` to the first of `targets` that is free and reachable, with it; else
+/// why the last one is not.
+fn rest_path(
+    m: &ArmMotion,
+    from: &[f32],
+    targets: Vec<Vec<f32>>,
+    rrt: &RrtParams,
+    rng: &mut fastrand::Rng,
+) -> Result<(JointPath, Vec<f32>), String> {
+    let mut last = String::from("no rest posture");
+    for to in targets {
+        if let Some(c) = m.collision(&to) {
+            last = format!("at rest it collides: {c}");
+            continue;
+        }
+        match m.plan(from, &to, rrt, rng) {
+            Ok((path, _)) => return Ok((path, to)),
+            Err(e) => last = e.to_string(),
+        }
+    }
+    Err(last)
+}
+
 /// Arm values with the palm against `object`: the hand's flat side (its y axis) facing the
 /// surface point nearest the shoulder, just clear of it, the fingers turned about the normal
 /// in [`REACH_TURNS`] ways; from the person's posture first, then from random postures of the

@@ -592,6 +592,89 @@ fn the_member_takes_a_given_book_and_the_gripper_is_free_again() {
     assert_eq!(again.failure().unwrap().stage, Stage::Held);
 }
 
+/// The member with the left arm raised across the desk, its hand nearer the book than the
+/// right: the left cannot take it, the right does. And the other arm moves to rest on a
+/// planned, collision-free path when asked to clear the way.
+#[test]
+fn a_person_takes_with_the_other_hand_and_moves_an_arm_out_of_the_way() {
+    let world = library();
+    let planner = Planner::new();
+    let member = world.agent_id("member").unwrap();
+    let book = world.object_id("grey-book").unwrap();
+    let seeded = |w: &World, task: &str| {
+        let mut stream = planner
+            .run(w, task, &["grey-book", "member"], &CallOptions::seeded(1))
+            .unwrap();
+        stream
+            .next()
+            .unwrap_or_else(|| panic!("{task}: {}", stream.failure().unwrap()))
+    };
+    let given = seeded(&world, "give");
+    let model = world.agent(member).model.clone();
+    let mut w = given.world.clone();
+    let mut q = w.agent_state(member).q.clone();
+    let raised = [
+        ("l_shoulder_pitch_joint", -1.3),
+        ("l_shoulder_roll_joint", 0.8),
+        ("l_shoulder_yaw_joint", 0.0),
+        ("l_elbow_joint", 0.0),
+    ];
+    for (name, v) in raised {
+        q[model.dof_index(name).unwrap()] = v;
+    }
+    let base = w.agent_state(member).base;
+    w.set_agent_config(member, base, &q);
+    let at = w.object_pose(book).translation;
+    let hand = |n: &str| {
+        (w.agent_state(member).link_poses()[model.link_id(n).unwrap()].translation - at).length()
+    };
+    assert!(
+        hand("l_hand") < hand("r_hand"),
+        "the left hand is the nearer"
+    );
+    let taken = seeded(&w, "take");
+    recheck(&planner, &w, &taken);
+    let arms: Vec<(Phase, &str)> = taken
+        .summary
+        .trajectories
+        .iter()
+        .filter(|t| t.agent == "member")
+        .map(|t| (t.phase, t.arm.as_str()))
+        .collect();
+    assert_eq!(
+        arms,
+        [(Phase::Reach, "right_arm"), (Phase::Withdraw, "right_arm")]
+    );
+    // Clearing the way: the left arm back to where the scene started it, on a planned path.
+    let person = planner.agent_setup(&w, member).unwrap();
+    let right = person
+        .arms
+        .iter()
+        .position(|a| a.name == "right_arm")
+        .unwrap();
+    let left = person
+        .arms
+        .iter()
+        .position(|a| a.name == "left_arm")
+        .unwrap();
+    let mut rng = fastrand::Rng::with_seed(1);
+    let rrt = planner.config().rrt.clone();
+    let rested = gtp::take::rest_other_arms(&person, right, &w, &w, book, &rrt, &mut rng).unwrap();
+    let (moves, before) = (rested.moves, rested.before);
+    assert_eq!(moves.len(), 1);
+    assert_eq!(moves[0].0, left);
+    let rest = &world.agent(member).initial_q;
+    let end = before.agent_state(member).q.clone();
+    for (name, _) in raised {
+        let k = model.dof_index(name).unwrap();
+        assert!((end[k] - rest[k]).abs() < 1e-4, "{name} at rest");
+    }
+    assert!(moves[0].1.waypoints.len() >= 2);
+    // At rest already, there is nothing to clear.
+    let again = gtp::take::rest_other_arms(&person, right, &before, &before, book, &rrt, &mut rng);
+    assert!(again.is_err());
+}
+
 /// Both grippers full: a pick fails and names the gripper, not the object's size.
 #[test]
 fn a_pick_with_both_grippers_full_says_so() {
@@ -608,16 +691,15 @@ fn a_pick_with_both_grippers_full_says_so() {
     assert!(f.message.contains("holds `grey-book`"), "{}", f.message);
 }
 
-/// An object no grasp can pick up where it lies (the cluttered desk's second big book at the
-/// start: out of reach, or the gripper hits what is around it): the search stops after the
-/// first point, where every grasp was tried, and says the pick stopped it (not the deepest
-/// stage some candidate reached). The base stays where it is (`robot-effort` 1): with base
-/// moves the robot steps to where it can pick the book.
+/// An object no grasp can pick up where it lies (the POS machine on the far shelf, out of the
+/// arm's reach from the station): the search stops after the first point, where every grasp
+/// was tried, and says the pick stopped it (not the deepest stage some candidate reached). The
+/// base stays where it is (`robot-effort` 1).
 #[test]
 fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
     let world = World::load(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../domains/library/cluttered-desk.toml"
+        "/../../domains/library/scene-far-pos.toml"
     ))
     .unwrap();
     let planner = Planner::new();
@@ -625,7 +707,7 @@ fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
         .run(
             &world,
             "show",
-            &["big-book-2", "member"],
+            &["pos-machine", "member"],
             &CallOptions::seeded(1).with("robot-effort", "1"),
         )
         .unwrap();

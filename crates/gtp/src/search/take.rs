@@ -68,31 +68,38 @@ impl Search {
         after.set_agent_config(robot_id, base, &q);
         let pose = clear.then(|| world.object_pose(o));
         let retreat = m.record(Phase::Retreat, retreat, Grip::Around(pose));
-        let (motion, person) = self.person_takes(&world, &after, o)?;
+        let (motion, person, cleared) = self.person_takes(&world, &after, o)?;
         let hand = &person.arms[motion.arm];
         after.set_agent_config(h, world.agent_state(h).base, &motion.q_end);
         after.attach_with_grasp(o, h, hand.tool_link, motion.grasp);
-        let human_motion = |phase, path: JointPath, held| Trajectory {
-            phase,
-            agent: hname.clone(),
-            arm: hand.name.clone(),
-            joints: hand.joint_names.clone(),
-            length: path.length(&hand.space),
-            waypoints: path.unwrapped(&hand.space).waypoints,
-            held,
-            gripper_opening: 0.0,
-            ignored: vec![],
-            straddles: None,
+        let human_motion = |phase, arm: usize, path: &JointPath, held| {
+            let a = &person.arms[arm];
+            Trajectory {
+                phase,
+                agent: hname.clone(),
+                arm: a.name.clone(),
+                joints: a.joint_names.clone(),
+                length: path.length(&a.space),
+                waypoints: path.unwrapped(&a.space).waypoints,
+                held,
+                gripper_opening: 0.0,
+                ignored: vec![],
+                straddles: None,
+            }
         };
         let held = HeldRecord {
             object: oname.clone(),
             object_in_tool: motion.grasp.into(),
         };
-        let trajectories = vec![
-            human_motion(Phase::Reach, motion.reach.clone(), None),
+        let mut trajectories: Vec<Trajectory> = cleared
+            .iter()
+            .map(|(k, path)| human_motion(Phase::Clear, *k, path, None))
+            .collect();
+        trajectories.extend([
+            human_motion(Phase::Reach, motion.arm, &motion.reach, None),
             retreat,
-            human_motion(Phase::Withdraw, motion.withdraw.clone(), Some(held)),
-        ];
+            human_motion(Phase::Withdraw, motion.arm, &motion.withdraw, Some(held)),
+        ]);
         Some(self.take_solution(after, level, trajectories))
     }
 
@@ -206,15 +213,19 @@ impl Search {
         Err(last)
     }
 
-    /// The person's reach and withdraw of a take, with the free hand nearest the object
-    /// (`before`: the robot holds it out; `after`: the robot drawn back). `None`, with the
-    /// reason recorded, when both hands are full or no collision-free motion exists.
+    /// The person's side of the take: their nearest free hand, else another free hand, else
+    /// the nearest with their other arms moved to rest first (a hand blocked by the person's
+    /// own other arm); with the other arms' paths, empty unless they moved.
     fn person_takes(
         &mut self,
         before: &World,
         after: &World,
         o: ObjectId,
-    ) -> Option<(crate::take::TakeMotion, Arc<RobotSetup>)> {
+    ) -> Option<(
+        crate::take::TakeMotion,
+        Arc<RobotSetup>,
+        crate::take::ArmPaths,
+    )> {
         let oname = self.object_name();
         let hname = self.human_name();
         let Some(person) = self.person.clone() else {
@@ -224,35 +235,50 @@ impl Search {
             ));
         };
         let at = before.object_pose(o).translation;
-        let free_arm = (0..person.arms.len())
+        let distance = |k: usize| {
+            let p = before.agent_state(person.agent).link_poses()[person.arms[k].tool_link];
+            (p.translation - at).length()
+        };
+        let mut free: Vec<usize> = (0..person.arms.len())
             .filter(|&i| {
                 robot::in_grippers(before, &person)
                     .all(|(_, a, _)| a.tool_link != person.arms[i].tool_link)
             })
-            .min_by(|&i, &j| {
-                let d = |k: usize| {
-                    let p = before.agent_state(person.agent).link_poses()[person.arms[k].tool_link];
-                    (p.translation - at).length()
-                };
-                d(i).total_cmp(&d(j))
-            });
-        let Some(arm) = free_arm else {
+            .collect();
+        free.sort_by(|&i, &j| distance(i).total_cmp(&distance(j)));
+        let Some(&nearest) = free.first() else {
             return self.fail(Failure::at(
                 Stage::Held,
                 format!("both of {hname}'s hands hold something: no hand to take `{oname}` with"),
             ));
         };
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
-        self.stats.planner_calls += 2;
-        match crate::take::plan_take(&person, arm, before, after, o, &self.cfg.rrt, &mut rng) {
-            Ok(m) => Some((m, person)),
-            Err(e) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("{hname} cannot take `{oname}`: {e}")
-                });
-                None
+        let rrt = self.cfg.rrt.clone();
+        let mut first_error = None;
+        for &arm in &free {
+            self.stats.planner_calls += 2;
+            match crate::take::plan_take(&person, arm, before, after, o, &rrt, &mut rng) {
+                Ok(m) => return Some((m, person, Vec::new())),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
             }
         }
+        let rested =
+            crate::take::rest_other_arms(&person, nearest, before, after, o, &rrt, &mut rng);
+        if let Ok(r) = rested {
+            self.stats.planner_calls += 2 + r.moves.len();
+            let take =
+                crate::take::plan_take(&person, nearest, &r.before, &r.after, o, &rrt, &mut rng);
+            if let Ok(m) = take {
+                return Some((m, person, r.moves));
+            }
+        }
+        let e = first_error.unwrap_or_default();
+        self.reject(Stage::Trajectory, || {
+            format!("{hname} cannot take `{oname}`: {e}")
+        });
+        None
     }
 
     /// A take's solution: the world after it, the effort at which the human reached the
