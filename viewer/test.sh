@@ -4,6 +4,9 @@
 # HTNGTP_PLAN=path/to/plan.json runs them on another plan (default: fixtures/sample-plan.json).
 # HTNGTP_BIN=path/to/htngtp also tests `htngtp view`; by default a built binary under the cargo
 # target directory is used when it has the `view` subcommand.
+# With that binary and ../shared/robots beside the checkout, tests/real-pr2.test.mjs plans the
+# real PR2 (about 20 s; HTNGTP_PR2_PLAN=plan.json uses a plan instead) and checks that the page
+# loads its visual meshes from `htngtp view`.
 set -euo pipefail
 cd "$(dirname "$0")"
 ./setup.sh

@@ -7,7 +7,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { CSS2DRenderer } from 'three/addons/renderers/CSS2DRenderer.js';
 import { type Plan, PlanError, type Pose, parsePlanText } from './plan';
-import { SceneView } from './scene';
+import { SceneView, type VisualStats } from './scene';
 import { Timeline, type WorldState } from './timeline';
 import { Ui } from './ui';
 
@@ -42,6 +42,8 @@ export interface TestHook {
   readonly objectCount: number;
   readonly agentCount: number;
   readonly linkCount: number;
+  /** The links' visual meshes: loading, loaded, failed. */
+  readonly visuals: VisualStats;
   readonly stepCount: number;
   readonly currentStep: number;
   readonly time: number;
@@ -210,7 +212,7 @@ class App {
       this.fail(e instanceof PlanError ? e : new PlanError(url, [`could not load the plan: ${String(e)}`]));
       return;
     }
-    this.loadText(text, url);
+    this.loadText(text, url, url);
   }
 
   async loadFile(file: File): Promise<void> {
@@ -224,12 +226,15 @@ class App {
     this.loadText(text, file.name);
   }
 
-  loadText(text: string, source: string): void {
+  /** `base`: the plan's URL, for its visual meshes (null for a plan read from a file). */
+  loadText(text: string, source: string, base: string | null = null): void {
     let plan: Plan;
     let view: SceneView;
     try {
       plan = parsePlanText(text, source);
-      view = new SceneView(plan);
+      view = new SceneView(plan, base, () => {
+        this.dirty = true;
+      });
     } catch (e) {
       this.fail(e instanceof PlanError ? e : new PlanError(source, [`could not build the scene: ${String(e)}`]));
       return;
@@ -448,6 +453,10 @@ const hook: TestHook = {
   get objectCount() { return app.sceneView?.objectsGroup.children.length ?? 0; },
   get agentCount() { return app.sceneView?.agentsGroup.children.length ?? 0; },
   get linkCount() { return app.sceneView?.linkCount ?? 0; },
+  get visuals() {
+    const v = app.sceneView?.visualStats;
+    return v === undefined ? { pending: 0, links: 0, meshes: 0, failed: [] } : { ...v, failed: [...v.failed] };
+  },
   get stepCount() { return app.plan?.steps.length ?? 0; },
   get currentStep() { return app.state?.step ?? -1; },
   get time() { return app.t; },

@@ -32,9 +32,22 @@ export interface LinkShape {
   color: Color | null;
 }
 
+/** A URDF visual mesh of a link: a file to load (STL, COLLADA, OBJ), for display only. */
+export interface Visual {
+  /** Where the file is served, relative to the plan's URL (`mesh/3.dae`). */
+  uri: string;
+  /** The mesh's pose in the link frame. */
+  pose: Pose;
+  scale: Vec3;
+  /** The URDF material's colour, or null (the file's own materials, or the link's colour). */
+  color: Color | null;
+}
+
 export interface Link {
   name: string;
   shapes: LinkShape[];
+  /** The link's visual meshes (may be empty: the link is drawn by its shapes). */
+  visuals: Visual[];
 }
 
 export interface Agent {
@@ -323,6 +336,26 @@ class Validator {
     return out.length === a.length ? out : null;
   }
 
+  /** A link's optional `visuals`: `{ uri, pose?, scale?, color? }` each. */
+  visuals(x: unknown, p: string): Visual[] {
+    if (x === undefined || x === null) return [];
+    const a = this.arr(x, p);
+    if (a === null) return [];
+    const out: Visual[] = [];
+    a.forEach((v, j) => {
+      const vp = `${p}[${j}]`;
+      const vo = this.obj(v, vp);
+      if (vo === null) return;
+      const uri = this.str(this.field(vo, 'uri', vp), `${vp}.uri`);
+      const pose = vo['pose'] === undefined || vo['pose'] === null ? IDENTITY : this.pose(vo['pose'], `${vp}.pose`);
+      const scale = vo['scale'] === undefined || vo['scale'] === null ? [1, 1, 1] : this.nums(vo['scale'], 3, `${vp}.scale`);
+      if (scale !== null && scale.some((c) => c === 0)) this.fail(`${vp}.scale`, 'expected non-zero scale factors');
+      const color = this.color(vo['color'], `${vp}.color`);
+      if (uri !== null && pose !== null && scale !== null) out.push({ uri, pose, scale: scale as Vec3, color });
+    });
+    return out;
+  }
+
   plan(doc: unknown): Plan | null {
     const root = this.obj(doc, '');
     if (root === null) return null;
@@ -445,7 +478,11 @@ class Validator {
       if (ln === null) return;
       if (linkNames.has(ln)) this.fail(`${lp}.name`, `link "${ln}" is declared twice`);
       linkNames.add(ln);
-      links.push({ name: ln, shapes: this.shapes(this.field(lo, 'shapes', lp), `${lp}.shapes`) ?? [] });
+      links.push({
+        name: ln,
+        shapes: this.shapes(this.field(lo, 'shapes', lp), `${lp}.shapes`) ?? [],
+        visuals: this.visuals(lo['visuals'], `${lp}.visuals`),
+      });
     });
     if (eye !== null && !linkNames.has(eye)) this.fail(`${p}.eye_link`, `"${eye}" is not one of the agent's links`);
     const link_poses = this.linkPoses(this.field(o, 'link_poses', p), `${p}.link_poses`, linkNames);

@@ -4,13 +4,26 @@
 
 import * as THREE from 'three';
 import { CSS2DObject } from 'three/addons/renderers/CSS2DRenderer.js';
-import type { Color, Plan, Pose, Shape } from './plan';
+import type { Color, Plan, Pose, Shape, Visual } from './plan';
 import type { WorldState } from './timeline';
+import { VisualLoader, placeVisual, visualUrl } from './visuals';
 
 const DEFAULT_OBJECT_COLOR: Color = [0.7, 0.7, 0.7];
 const DEFAULT_ROBOT_COLOR: Color = [0.8, 0.8, 0.82];
 const DEFAULT_HUMAN_COLOR: Color = [0.85, 0.7, 0.6];
 const HIGHLIGHT = new THREE.Color(0xffb000);
+
+/** How the links' visual meshes are doing (the browser tests read it). */
+export interface VisualStats {
+  /** Links with visuals whose files are still loading. */
+  pending: number;
+  /** Links drawn by their visuals. */
+  links: number;
+  /** three.js meshes in the loaded visuals. */
+  meshes: number;
+  /** Links kept on their collision shapes because a visual failed, with why. */
+  failed: string[];
+}
 
 /** The built scene: groups by name, so that states can be applied and read back. */
 export class SceneView {
@@ -23,8 +36,16 @@ export class SceneView {
   private readonly geometries: THREE.BufferGeometry[] = [];
   private readonly labels: CSS2DObject[] = [];
   private highlighted = new Set<string>();
+  private readonly visualLoader = new VisualLoader();
+  private readonly loadedFiles: Promise<THREE.Object3D>[] = [];
+  private disposed = false;
+  readonly visualStats: VisualStats = { pending: 0, links: 0, meshes: 0, failed: [] };
 
-  constructor(plan: Plan) {
+  /**
+   * `base`: the plan's URL, against which the links' visual meshes are loaded (null: draw links
+   * by their collision shapes only); `onChange` is called when a link's drawing changes.
+   */
+  constructor(plan: Plan, base: string | null = null, private readonly onChange: () => void = () => {}) {
     this.root.name = 'plan';
     this.objectsGroup.name = 'objects';
     this.agentsGroup.name = 'agents';
@@ -56,10 +77,16 @@ export class SceneView {
       for (const l of a.links) {
         const g = new THREE.Group();
         g.name = `${a.name}/${l.name}`;
+        const collision = new THREE.Group();
+        collision.name = 'collision';
         for (const s of l.shapes) {
           const m = this.mesh(s.shape, s.color ?? fallback, true);
           applyPose(m, s.pose);
-          g.add(m);
+          collision.add(m);
+        }
+        g.add(collision);
+        if (base !== null && l.visuals.length > 0) {
+          this.loadVisuals(g, collision, l.visuals, base, l.shapes[0]?.color ?? fallback);
         }
         applyPose(g, a.link_poses[l.name]!);
         agentGroup.add(g);
@@ -76,6 +103,45 @@ export class SceneView {
       this.agentsGroup.add(agentGroup);
       this.links.set(a.name, byLink);
     }
+  }
+
+  /** Draws link `g` by its visuals once they all load; on a failure it keeps `collision`. */
+  private loadVisuals(g: THREE.Group, collision: THREE.Group, visuals: Visual[], base: string, fallback: Color): void {
+    this.visualStats.pending++;
+    const files = visuals.map((v) => {
+      const p = this.visualLoader.load(visualUrl(v.uri, base));
+      this.loadedFiles.push(p);
+      return p;
+    });
+    Promise.all(files)
+      .then((loaded) => {
+        if (this.disposed) return;
+        const group = new THREE.Group();
+        group.name = 'visual';
+        loaded.forEach((file, i) => {
+          const { object, materials } = placeVisual(file, visuals[i]!, fallback);
+          this.materials.push(...(materials as THREE.MeshStandardMaterial[]));
+          group.add(object);
+        });
+        let meshes = 0;
+        group.traverse((o) => {
+          if (o instanceof THREE.Mesh) meshes++;
+        });
+        g.add(group);
+        collision.visible = false;
+        this.visualStats.links++;
+        this.visualStats.meshes += meshes;
+      })
+      .catch((e: unknown) => {
+        if (this.disposed) return;
+        const why = `${g.name}: ${e instanceof Error ? e.message : String(e)}`;
+        this.visualStats.failed.push(why);
+        console.warn(`visual mesh not shown, the link is drawn by its collision shapes: ${why}`);
+      })
+      .finally(() => {
+        this.visualStats.pending--;
+        if (!this.disposed) this.onChange();
+      });
   }
 
   private label(parent: THREE.Object3D, text: string, z: number, cls: string): CSS2DObject {
@@ -157,6 +223,18 @@ export class SceneView {
   }
 
   dispose(): void {
+    this.disposed = true;
+    for (const p of this.loadedFiles) {
+      p.then(
+        (o) =>
+          o.traverse((m) => {
+            if (!(m instanceof THREE.Mesh)) return;
+            (m.geometry as THREE.BufferGeometry).dispose();
+            for (const mat of Array.isArray(m.material) ? m.material : [m.material]) (mat as THREE.Material).dispose();
+          }),
+        () => {},
+      );
+    }
     this.root.removeFromParent();
     for (const l of this.labels) l.element.remove();
     for (const g of this.geometries) g.dispose();

@@ -77,7 +77,20 @@ const UNSOLVED = variant((p) => {
   p.root = [];
 });
 
-const extra = { '/plan.json': PLAN_TEXT, '/unsolved.json': UNSOLVED };
+// Visual meshes: the first agent's first link drawn by an ASCII STL box the server holds, and
+// the same plan with a mesh the server does not have (the link keeps its collision shapes).
+const BOX_STL = ['solid box', ...[[0, 1, 2], [0, 2, 3]].map((t) => [
+  'facet normal 0 0 1', 'outer loop', ...t.map((k) => `vertex ${[[0, 0, 0], [0.2, 0, 0], [0.2, 0.2, 0], [0, 0.2, 0]][k].join(' ')}`), 'endloop', 'endfacet',
+].join('\n')), 'endsolid box', ''].join('\n');
+const withVisual = (uri) => variant((p) => {
+  p.scene.agents[0].links[0].visuals = [{ uri, pose: { t: [0, 0, 0.1], q: [0, 0, 0, 1] }, scale: [1, 1, 2], color: [0.9, 0.1, 0.1] }];
+});
+
+const extra = {
+  '/plan.json': PLAN_TEXT, '/unsolved.json': UNSOLVED,
+  '/visual/plan.json': withVisual('mesh/0.stl'), '/visual/mesh/0.stl': BOX_STL,
+  '/visual/missing.json': withVisual('mesh/9.stl'),
+};
 for (const [path, { text }] of Object.entries(BAD)) extra[path] = text;
 
 let server;
@@ -305,6 +318,38 @@ describe('the sample plan', () => {
     mkdirSync(dirname(SCREENSHOT), { recursive: true });
     await page.screenshot({ path: SCREENSHOT });
     assert.equal(await hook(page, () => __htngtp.currentStep), k);
+  });
+});
+
+describe('visual meshes', () => {
+  const settled = (page) => page.waitForFunction(() => __htngtp.ready && __htngtp.visuals.pending === 0, null, { timeout: 30_000 });
+
+  test('a link with a visual mesh is drawn by it, the others by their shapes', async () => {
+    const page = await open(browser.context, `${server.url}?plan=/visual/plan.json`);
+    try {
+      await settled(page);
+      const v = await hook(page, () => __htngtp.visuals);
+      assert.deepEqual(v, { pending: 0, links: 1, meshes: 1, failed: [] });
+      assert.equal(await hook(page, () => __htngtp.linkCount), PLAN.scene.agents.reduce((n, a) => n + a.links.length, 0));
+      assert.ok(!page.logs.some((l) => l.startsWith('error') || l.startsWith('pageerror')), page.logs.join('\n'));
+    } finally {
+      await page.close();
+    }
+  });
+
+  test('a visual mesh that does not load leaves the link on its collision shapes', async () => {
+    const page = await open(browser.context, `${server.url}?plan=/visual/missing.json`);
+    try {
+      await settled(page);
+      const v = await hook(page, () => __htngtp.visuals);
+      assert.equal(v.links, 0);
+      assert.equal(v.failed.length, 1);
+      assert.ok(v.failed[0].includes('HTTP 404'), v.failed[0]);
+      assert.equal(await hook(page, () => __htngtp.error), null);
+      assert.ok((await hook(page, () => __htngtp.pixelStats())).variance > 200);
+    } finally {
+      await page.close();
+    }
   });
 });
 

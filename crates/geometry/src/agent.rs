@@ -23,9 +23,10 @@
 //!   SDFormat convention; `urdf-rs` reads this element although ROS's URDF 1.0 has no capsule).
 //!   `<mesh filename=".." scale="..">` (STL, COLLADA, OBJ; `package://`, `file://` or relative
 //!   names, [`packages`]) collides as convex pieces, its hull or a decomposition ([`convex`]);
-//!   a link may have several collision elements. Visual elements are only checked for their
-//!   mesh files (a missing one is a warning); transmissions, Gazebo, ros2_control and
-//!   materials are ignored.
+//!   a link may have several collision elements. Visual mesh elements are kept as
+//!   [`VisualMesh`]es (the file, origin, scale and material colour; the file is not read:
+//!   planning never needs it, pictures and the viewer read it), a missing file is a warning;
+//!   visual primitives, transmissions, Gazebo, ros2_control and textures are ignored.
 //! * Revolute and prismatic joints must have `<limit lower=".." upper="..">` with
 //!   `lower < upper`; continuous joints have no limits.
 //! * Every number must be finite.
@@ -338,6 +339,26 @@ pub struct Link {
     pub children: Vec<usize>,
     /// Collision shapes (may be empty: pure frames such as a tool frame).
     pub collisions: Vec<CollisionShape>,
+    /// Visual meshes whose files exist (pictures and the viewer draw the link by them when
+    /// there are any, by its collision shapes otherwise).
+    pub visuals: Vec<VisualMesh>,
+}
+
+/// A URDF `<visual>` element with a `<mesh>`: where its file is and how it is placed. The file
+/// is read only when a picture is drawn ([`crate::render::render_visual`]) or a viewer loads it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VisualMesh {
+    /// The file name as the URDF writes it (`package://..`, `file://..` or relative).
+    pub uri: String,
+    /// The file it resolves to (absolute when it could be made so; it existed at load time).
+    pub path: std::path::PathBuf,
+    /// Pose of the mesh in the link frame (the visual's `<origin>`).
+    pub local_pose: Pose,
+    /// The mesh's `scale` (1, 1, 1 when absent).
+    pub scale: Vector,
+    /// RGBA of the visual's material (given inline, or by name from the robot's top-level
+    /// `<material>`s), when it has a colour.
+    pub colour: Option<[f32; 4]>,
 }
 
 /// Names and limits of an agent's degrees of freedom, shared by a model and its

@@ -3,14 +3,19 @@
 //!
 //! [`render`] fills an *id buffer* (which body each pixel sees), a depth buffer and a shaded
 //! colour image; [`Rendered::save_png`] writes the picture. Pixel visibility
-//! ([`crate::visibility`]) uses the same [`Camera`] and [`SceneBvh`].
+//! ([`crate::visibility`]) uses the same [`Camera`] and [`SceneBvh`]. [`render_visual`] draws
+//! the agents' links by their URDF visual meshes where they have any (read on first use and
+//! kept per file and scale: planning never reads them), by their collision shapes otherwise.
 
-use std::path::Path;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::Ray;
+use parry3d::shape::SharedShape;
 
 use crate::scene::AgentId;
 use crate::world::{Body, BodyOwner, World};
@@ -247,8 +252,121 @@ fn shade(colour: [u8; 3], normal: Vector, view_dir: Vector) -> [u8; 3] {
 /// Renders the world from `camera` at `width` x `height` pixels, in parallel over rows.
 /// The floor (z = 0) is drawn as a grey checkerboard (it owns no pixels in the id buffer).
 pub fn render(world: &World, camera: &Camera, width: usize, height: usize) -> Rendered {
+    render_scene(&SceneBvh::new(world), camera, width, height)
+}
+
+/// Renders the world as [`render`] does, but with every agent link that has URDF visual meshes
+/// drawn by them (placed at the link's pose times the visual's origin, scaled, in the
+/// material's colour or else the agent's); links without visual meshes, or whose meshes cannot
+/// be read, are drawn by their collision shapes. Also returns one warning per visual mesh file
+/// that could not be read.
+pub fn render_visual(
+    world: &World,
+    camera: &Camera,
+    width: usize,
+    height: usize,
+) -> (Rendered, Vec<String>) {
+    let drawn = VisualBodies::of(world);
+    let scene = SceneBvh::from_bodies(drawn.bodies());
+    (render_scene(&scene, camera, width, height), drawn.warnings)
+}
+
+/// The shapes a picture with visual meshes draws, owned (visual meshes are built here).
+pub struct VisualBodies {
+    shapes: Vec<(BodyOwner, SharedShape, parry3d::math::Pose, [u8; 3])>,
+    /// One line per visual mesh file that could not be read (its link is drawn by its
+    /// collision shapes).
+    pub warnings: Vec<String>,
+}
+
+impl VisualBodies {
+    /// The world's objects, and its agents' links by their visual meshes where they have any.
+    pub fn of(world: &World) -> VisualBodies {
+        let mut shapes = Vec::new();
+        let mut warnings = Vec::new();
+        let mut by_visuals = std::collections::HashSet::new();
+        for a in world.agent_ids() {
+            let info = world.agent(a);
+            let poses = world.agent_state(a).link_poses();
+            for (li, link) in info.model.links().iter().enumerate() {
+                let mut drawn = Vec::new();
+                for v in &link.visuals {
+                    match visual_shape(&v.path, v.scale) {
+                        Ok(shape) => {
+                            let colour = v.colour.map_or(info.spec.colour, |c| {
+                                [0, 1, 2].map(|k| (c[k] * 255.0).round() as u8)
+                            });
+                            drawn.push((
+                                BodyOwner::Agent(a, li),
+                                shape,
+                                poses[li] * v.local_pose,
+                                colour,
+                            ));
+                        }
+                        Err(e) => warnings.push(format!(
+                            "agent '{}': link '{}': visual mesh '{}' ({}): {e}; drawn by its \
+                             collision shapes",
+                            info.name(),
+                            link.name,
+                            v.uri,
+                            v.path.display()
+                        )),
+                    }
+                }
+                if !drawn.is_empty() {
+                    by_visuals.insert((a, li));
+                    shapes.extend(drawn);
+                }
+            }
+        }
+        for b in world.bodies() {
+            let replaced =
+                matches!(b.owner, BodyOwner::Agent(a, li) if by_visuals.contains(&(a, li)));
+            if !replaced {
+                shapes.push((b.owner, b.shape.clone(), b.pose, b.colour));
+            }
+        }
+        VisualBodies { shapes, warnings }
+    }
+
+    /// The bodies, borrowing the shapes.
+    pub fn bodies(&self) -> Vec<Body<'_>> {
+        self.shapes
+            .iter()
+            .map(|(owner, shape, pose, colour)| Body {
+                owner: *owner,
+                shape,
+                pose: *pose,
+                colour: *colour,
+            })
+            .collect()
+    }
+}
+
+/// A visual mesh file as a triangle mesh, scaled; read once per file and scale (errors too).
+fn visual_shape(path: &Path, scale: Vector) -> Result<SharedShape, String> {
+    type Cache = HashMap<(PathBuf, [u32; 3]), Result<SharedShape, String>>;
+    static CACHE: OnceLock<Mutex<Cache>> = OnceLock::new();
+    let key = (path.to_path_buf(), scale.to_array().map(f32::to_bits));
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(found) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return found.clone();
+    }
+    let made = crate::mesh_file::read_mesh(path).and_then(|m| {
+        let vertices = m.vertices.iter().map(|v| *v * scale).collect();
+        SharedShape::trimesh(vertices, m.triangles)
+            .map_err(|e| format!("not a usable triangle mesh: {e:?}"))
+    });
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(key, made.clone());
+    made
+}
+
+/// Renders the bodies of `scene` from `camera` (see [`render`]).
+fn render_scene(scene: &SceneBvh<'_>, camera: &Camera, width: usize, height: usize) -> Rendered {
     use rayon::prelude::*;
-    let scene = SceneBvh::new(world);
     let n = width * height;
     let mut ids = vec![None; n];
     let mut depth = vec![f32::INFINITY; n];

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use geometry::render::{Camera, agent_camera, render};
+use geometry::render::{Camera, agent_camera, render, render_visual};
 use geometry::scene::Scene;
 use geometry::world::{BodyOwner, World};
 use parry3d::math::Vector;
@@ -84,4 +84,147 @@ fn the_member_sees_the_desk_and_the_robot() {
         .filter(|o| matches!(o, Some(BodyOwner::Agent(a, _)) if *a == pr2))
         .count();
     assert!(robot_pixels > 100, "the PR2 stands across the desk");
+}
+
+/// A camera from above over the 2 m x 2 m square around the origin.
+fn top_of_square() -> Camera {
+    let area = parry3d::bounding_volume::Aabb::new(
+        Vector::new(-1.0, -1.0, 0.0),
+        Vector::new(1.0, 1.0, 1.0),
+    );
+    Camera::top(&area, 1.0)
+}
+
+/// An ASCII STL of an axis-aligned box with these half extents, centred at the origin.
+fn box_stl(h: [f32; 3]) -> String {
+    let v = |i: usize| {
+        let s = |bit: usize, k: usize| if i >> bit & 1 == 1 { h[k] } else { -h[k] };
+        [s(0, 0), s(1, 1), s(2, 2)]
+    };
+    // Two triangles per face, as corner indices (bit 0: +x, bit 1: +y, bit 2: +z).
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    let mut out = String::from("solid box\n");
+    for f in faces {
+        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            out.push_str("facet normal 0 0 0\nouter loop\n");
+            for i in t {
+                let p = v(i);
+                out.push_str(&format!("vertex {} {} {}\n", p[0], p[1], p[2]));
+            }
+            out.push_str("endloop\nendfacet\n");
+        }
+    }
+    out.push_str("endsolid box\n");
+    out
+}
+
+/// A one-link robot whose collision is a 0.1 m box and whose visual is `visual` (a mesh file
+/// name), in a scene of its own; the world and the link's owner.
+fn one_link_robot(dir: &str, visual: &str) -> (World, BodyOwner) {
+    let root = std::env::temp_dir().join(format!("htngtp-visual-{dir}-{}", std::process::id()));
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::write(root.join("big.stl"), box_stl([0.2, 0.2, 0.2])).unwrap();
+    std::fs::write(root.join("bad.stl"), b"solid x\nfacet normal 0 0 1\n").unwrap();
+    std::fs::write(
+        root.join("bot.urdf"),
+        format!(
+            r#"<robot name="bot">
+  <material name="red"><color rgba="0.9 0.1 0.1 1"/></material>
+  <link name="base_link">
+    <collision><origin xyz="0 0 0.5"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision>
+    <visual><origin xyz="0 0 0.5"/><geometry><mesh filename="{visual}"/></geometry>
+      <material name="red"/></visual>
+  </link>
+</robot>"#
+        ),
+    )
+    .unwrap();
+    std::fs::write(root.join("bot.srdf"), r#"<robot name="bot"/>"#).unwrap();
+    let scene = r#"
+[scene]
+bounds = { min = [-1, -1, 0], max = [1, 1, 1] }
+
+[[agents]]
+name = "bot"
+kind = "robot"
+urdf = "bot.urdf"
+eye = "base_link"
+hands = ["base_link"]
+shoulders = ["base_link"]
+colour = [30, 30, 200]
+base = { x = 0, y = 0, yaw = 0 }
+"#;
+    let w = World::from_scene(Scene::from_str(scene, "v.toml", &root, "v").unwrap()).unwrap();
+    let bot = w.agent_id("bot").unwrap();
+    (w, BodyOwner::Agent(bot, 0))
+}
+
+#[test]
+fn links_are_drawn_by_their_visual_meshes_in_the_material_colour() {
+    let (w, link) = one_link_robot("big", "big.stl");
+    let model = &w.agent(w.agent_id("bot").unwrap()).model;
+    assert_eq!(model.links()[0].visuals.len(), 1);
+    assert!(
+        model.load_warnings().is_empty(),
+        "{:?}",
+        model.load_warnings()
+    );
+    let cam = top_of_square();
+    let collision = render(&w, &cam, 200, 200);
+    let (visual, warnings) = render_visual(&w, &cam, 200, 200);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    // The visual box is 4 times as wide as the collision box: 16 times the pixels, about.
+    let (c, v) = (collision.count(link), visual.count(link));
+    assert!(
+        c > 10 && v > 12 * c && v < 22 * c,
+        "collision {c} px, visual {v} px"
+    );
+    // Drawn in the material's red, not the agent's blue; the collision picture in blue.
+    let mid = 100 * 200 + 100;
+    let px = |img: &geometry::render::Rendered| {
+        [img.rgb[3 * mid], img.rgb[3 * mid + 1], img.rgb[3 * mid + 2]]
+    };
+    assert_eq!(visual.ids[mid], Some(link));
+    assert!(px(&visual)[0] > 2 * px(&visual)[2], "{:?}", px(&visual));
+    assert!(
+        px(&collision)[2] > 2 * px(&collision)[0],
+        "{:?}",
+        px(&collision)
+    );
+    // Deterministic: the same picture again.
+    assert_eq!(render_visual(&w, &cam, 200, 200).0.rgb, visual.rgb);
+}
+
+#[test]
+fn a_missing_visual_mesh_is_a_warning_and_the_link_keeps_its_collision_shape() {
+    let (w, link) = one_link_robot("missing", "nowhere.stl");
+    let model = &w.agent(w.agent_id("bot").unwrap()).model;
+    assert!(model.links()[0].visuals.is_empty());
+    let warnings = model.load_warnings();
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("nowhere.stl"),
+        "{warnings:?}"
+    );
+    let cam = top_of_square();
+    let (visual, _) = render_visual(&w, &cam, 100, 100);
+    assert_eq!(visual.count(link), render(&w, &cam, 100, 100).count(link));
+}
+
+#[test]
+fn an_unreadable_visual_mesh_falls_back_with_a_warning() {
+    let (w, link) = one_link_robot("bad", "bad.stl");
+    let cam = top_of_square();
+    let (visual, warnings) = render_visual(&w, &cam, 100, 100);
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("bad.stl") && warnings[0].contains("collision"),
+        "{warnings:?}"
+    );
+    assert_eq!(visual.count(link), render(&w, &cam, 100, 100).count(link));
 }

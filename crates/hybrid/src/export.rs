@@ -95,6 +95,7 @@ pub fn scene_json(world: &World) -> Value {
             })
         })
         .collect();
+    let mut files = MeshFiles::default();
     let agents: Vec<Value> = world
         .agent_ids()
         .map(|id| {
@@ -113,7 +114,11 @@ pub fn scene_json(world: &World) -> Value {
                             v
                         })
                         .collect();
-                    json!({ "name": l.name, "shapes": shapes })
+                    let mut link = json!({ "name": l.name, "shapes": shapes });
+                    if !l.visuals.is_empty() {
+                        link["visuals"] = l.visuals.iter().map(|v| files.visual_json(v)).collect();
+                    }
+                    link
                 })
                 .collect();
             let name = |l: usize| model.links()[l].name.clone();
@@ -141,6 +146,38 @@ pub fn scene_json(world: &World) -> Value {
         })
         .collect();
     json!({ "objects": objects, "agents": agents })
+}
+
+/// The visual mesh files of a plan, numbered in the order first met: the viewer loads file `n`
+/// as `mesh/n.EXT` (`htngtp view` serves exactly these files).
+#[derive(Default)]
+struct MeshFiles {
+    index: BTreeMap<std::path::PathBuf, usize>,
+}
+
+impl MeshFiles {
+    /// A visual as `{uri, file, source, pose, scale, color?}`.
+    fn visual_json(&mut self, v: &geometry::agent::VisualMesh) -> Value {
+        let next = self.index.len();
+        let n = *self.index.entry(v.path.clone()).or_insert(next);
+        let ext = v
+            .path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let mut out = json!({
+            "uri": format!("mesh/{n}.{ext}"),
+            "file": v.path.display().to_string(),
+            "source": v.uri,
+            "pose": pose_json(v.local_pose),
+            "scale": [v.scale.x, v.scale.y, v.scale.z],
+        });
+        if let Some(c) = v.colour {
+            out["color"] = json!([c[0], c[1], c[2]]);
+        }
+        out
+    }
 }
 
 fn link_poses_json(world: &World, agent: geometry::scene::AgentId, poses: &[Pose]) -> Value {
@@ -297,4 +334,33 @@ pub fn summary_line(s: &SolutionSummary) -> Value {
         "trajectory_length": s.trajectories.iter().map(|t| t.length).sum::<f32>(),
         "effort_level": s.effort_level,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn visual_mesh_files_are_numbered_once_each_with_their_extension() {
+        let visual = |path: &str, colour| geometry::agent::VisualMesh {
+            uri: format!("package://bot/{path}"),
+            path: std::path::PathBuf::from(format!("/robots/bot/{path}")),
+            local_pose: Pose::from_translation(Vector::new(0.0, 0.0, 0.5)),
+            scale: Vector::new(1.0, 1.0, 2.0),
+            colour,
+        };
+        let mut files = MeshFiles::default();
+        let a = files.visual_json(&visual("arm.DAE", Some([0.5, 0.25, 1.0, 1.0])));
+        let b = files.visual_json(&visual("hand.stl", None));
+        let again = files.visual_json(&visual("arm.DAE", None));
+        assert_eq!(a["uri"], "mesh/0.dae");
+        assert_eq!(b["uri"], "mesh/1.stl");
+        assert_eq!(again["uri"], "mesh/0.dae");
+        assert_eq!(a["file"], "/robots/bot/arm.DAE");
+        assert_eq!(a["source"], "package://bot/arm.DAE");
+        assert_eq!(a["scale"], json!([1.0, 1.0, 2.0]));
+        assert_eq!(a["pose"]["t"], json!([0.0, 0.0, 0.5]));
+        assert_eq!(a["color"], json!([0.5, 0.25, 1.0]));
+        assert!(b.get("color").is_none());
+    }
 }

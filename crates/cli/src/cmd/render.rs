@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use geometry::effort::aim_head;
-use geometry::render::{Camera, agent_camera, render};
+use geometry::render::{Camera, agent_camera, render_visual};
 use geometry::scene::AgentKind;
 
 /// Arguments of `htngtp render`.
@@ -13,7 +13,9 @@ use geometry::scene::AgentKind;
     about = "Draw a scene as a PNG picture, from an agent's eyes or from above",
     long_about = "Draw a scene (docs/scene-format.md) with the CPU ray caster: shaded, every object in \
                   its own colour, outlines between objects, a checkered floor. Agents are drawn \
-                  with their collision shapes in the scene's posture.\n\n\
+                  in the scene's posture, each link by its URDF visual meshes (STL, COLLADA, \
+                  OBJ; in the material's colour when the URDF gives one) when it has any, by \
+                  its collision shapes otherwise.\n\n\
                   Views: `human` (the first human's eyes), `robot` (the first robot's head camera), \
                   `top` (orthographic, from above), or an agent's name (e.g. `member`, `pr2`). \
                   An agent's view uses its field of view (people 120 x 90 degrees, the robot's \
@@ -98,7 +100,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             (Camera::top(&b, args.width as f32 / h as f32), h)
         }
     };
-    let img = render(&world, &camera, args.width, height);
+    let (img, warnings) = render_visual(&world, &camera, args.width, height);
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
     img.save_png(&args.out).map_err(anyhow::Error::msg)?;
     eprintln!(
         "wrote {} ({} x {}, view {})",

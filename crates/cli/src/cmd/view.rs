@@ -1,14 +1,18 @@
 //! `htngtp view PLAN.json`: serves the web viewer (`viewer/dist`, built with npm) and one plan
 //! JSON on 127.0.0.1, and prints the URL to open. A tiny static file server on `std::net`: GET and
 //! HEAD only, loopback only, paths confined to the viewer directory. The plan is re-read on every
-//! request, so re-planning and reloading the page shows the new plan.
+//! request, so re-planning and reloading the page shows the new plan. The visual mesh files the
+//! plan names (`scene.agents[].links[].visuals[]`: `uri` `mesh/N.EXT` for `file`) are served at
+//! `/mesh/N.EXT`, and no other file outside the viewer directory.
 
+use std::collections::HashMap;
 use std::fs;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
 use std::path::{Component, Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
+use std::time::{Duration, SystemTime};
 
 use anyhow::{Context, bail};
 
@@ -18,6 +22,8 @@ use crate::exit;
 pub const DIST_ENV: &str = "HTNGTP_VIEWER_DIST";
 /// The URL path at which the plan is served (the page loads `plan.json` beside itself).
 const PLAN_PATH: &str = "/plan.json";
+/// The URL folder of the plan's visual mesh files.
+const MESH_PREFIX: &str = "/mesh/";
 /// Longest request head accepted (request line and headers).
 const MAX_HEAD: usize = 16 * 1024;
 
@@ -70,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     println!("  plan:   {}", plan.display());
     println!("  viewer: {}", dist.display());
     println!("Open the URL in a browser; Ctrl-C stops the server.");
-    let site = Site { dist, plan };
+    let site = Site::new(dist, plan);
     serve(&listener, &site, None);
     Ok(exit::OK)
 }
@@ -144,13 +150,20 @@ pub fn find_dist(flag: Option<&Path>, env: Option<&Path>) -> anyhow::Result<Opti
     Ok(None)
 }
 
-/// What is served: the viewer's files, and the plan at `/plan.json`.
+/// What is served: the viewer's files, the plan at `/plan.json`, and the visual mesh files the
+/// plan names at `/mesh/N.EXT`.
 pub struct Site {
     /// The built viewer directory, canonical.
     pub dist: PathBuf,
     /// The plan JSON file.
     pub plan: PathBuf,
+    /// The plan's mesh files by URL path, read again when the plan file changes.
+    meshes: Mutex<Option<(PlanStamp, HashMap<String, PathBuf>)>>,
 }
+
+/// When a plan file was last modified, and its size: the mesh table is read again when either
+/// changes.
+type PlanStamp = (Option<SystemTime>, u64);
 
 /// An HTTP response, before it is written.
 #[derive(Debug, PartialEq)]
@@ -301,6 +314,31 @@ fn write_response(stream: &mut TcpStream, r: &Response, body: bool) -> std::io::
 }
 
 impl Site {
+    /// The site of a built viewer directory (canonical) and a plan file.
+    pub fn new(dist: PathBuf, plan: PathBuf) -> Site {
+        Site {
+            dist,
+            plan,
+            meshes: Mutex::new(None),
+        }
+    }
+
+    /// The visual mesh file the plan names at URL path `path` (`/mesh/N.EXT`): only a file the
+    /// plan's `visuals` list, and only an STL, COLLADA or OBJ file.
+    fn mesh_file(&self, path: &str) -> Option<PathBuf> {
+        let meta = fs::metadata(&self.plan).ok()?;
+        let stamp = (meta.modified().ok(), meta.len());
+        let mut cached = self.meshes.lock().unwrap_or_else(|e| e.into_inner());
+        if cached.as_ref().is_none_or(|(s, _)| *s != stamp) {
+            let text = fs::read(&self.plan).ok()?;
+            let value: serde_json::Value = serde_json::from_slice(&text).ok()?;
+            *cached = Some((stamp, plan_meshes(&value)));
+        }
+        let file = cached.as_ref()?.1.get(path)?.clone();
+        let ext = file.extension()?.to_str()?.to_ascii_lowercase();
+        (matches!(ext.as_str(), "stl" | "dae" | "obj") && file.is_file()).then_some(file)
+    }
+
     /// The response to a GET of `target` (a request target such as `/assets/viewer.js?v=1`).
     pub fn respond(&self, target: &str) -> Response {
         let path = target.split(['?', '#']).next().unwrap_or("");
@@ -315,6 +353,19 @@ impl Site {
                     body,
                 },
                 Err(e) => Response::text(500, &format!("cannot read the plan: {e}\n")),
+            };
+        }
+        if path.starts_with(MESH_PREFIX) {
+            let Some(file) = self.mesh_file(&path) else {
+                return Response::text(404, "no such mesh in the plan\n");
+            };
+            return match fs::read(&file) {
+                Ok(body) => Response {
+                    status: 200,
+                    content_type: content_type(&file),
+                    body,
+                },
+                Err(_) => Response::text(404, "not found\n"),
             };
         }
         let Some(file) = self.resolve(&path) else {
@@ -363,6 +414,42 @@ impl Site {
             Err(_) => Some(file), // does not exist: a 404, not a 403
         }
     }
+}
+
+/// The visual mesh files a plan names: URL path (`/` + `uri`) to `file`, for URIs of the form
+/// `mesh/NAME` (one segment, no hidden name).
+fn plan_meshes(plan: &serde_json::Value) -> HashMap<String, PathBuf> {
+    let mut out = HashMap::new();
+    let list = |v: &serde_json::Value, key: &str| -> Vec<serde_json::Value> {
+        v.get(key)
+            .and_then(|a| a.as_array())
+            .cloned()
+            .unwrap_or_default()
+    };
+    let Some(scene) = plan.get("scene") else {
+        return out;
+    };
+    for agent in list(scene, "agents") {
+        for link in list(&agent, "links") {
+            for v in list(&link, "visuals") {
+                let (Some(uri), Some(file)) = (
+                    v.get("uri").and_then(|u| u.as_str()),
+                    v.get("file").and_then(|f| f.as_str()),
+                ) else {
+                    continue;
+                };
+                let ok = uri.strip_prefix("mesh/").is_some_and(|name| {
+                    !name.is_empty()
+                        && !name.starts_with('.')
+                        && !name.contains(['/', '\\', ':', '\0'])
+                });
+                if ok && Path::new(file).is_absolute() {
+                    out.insert(format!("/{uri}"), PathBuf::from(file));
+                }
+            }
+        }
+    }
+    out
 }
 
 fn percent_decode(s: &str) -> Option<String> {
@@ -418,10 +505,10 @@ mod tests {
             r#"{"format":"htngtp-plan","version":1}"#,
         )
         .unwrap();
-        let site = Site {
-            dist: fs::canonicalize(root.join("dist")).unwrap(),
-            plan: root.join("plan.json"),
-        };
+        let site = Site::new(
+            fs::canonicalize(root.join("dist")).unwrap(),
+            root.join("plan.json"),
+        );
         (root, site)
     }
 
@@ -468,6 +555,44 @@ mod tests {
             assert_ne!(r.body, b"outside", "{bad} leaked a file");
         }
         assert_eq!(site.respond("/%zz").status, 400);
+        fs::remove_dir_all(root).unwrap();
+    }
+
+    #[test]
+    fn serves_the_mesh_files_the_plan_names_and_no_other() {
+        let (root, site) = fixture("meshes");
+        let mesh = root.join("arm.stl");
+        fs::write(&mesh, "solid arm\nendsolid arm\n").unwrap();
+        let plan = serde_json::json!({
+            "format": "htngtp-plan", "version": 1,
+            "scene": { "agents": [ { "links": [ { "name": "a", "visuals": [
+                { "uri": "mesh/0.stl", "file": fs::canonicalize(&mesh).unwrap() },
+                { "uri": "mesh/1.txt", "file": fs::canonicalize(root.join("secret.txt")).unwrap() },
+                { "uri": "mesh/../2.stl", "file": fs::canonicalize(&mesh).unwrap() },
+            ] } ] } ] }
+        });
+        fs::write(&site.plan, plan.to_string()).unwrap();
+        let r = site.respond("/mesh/0.stl");
+        assert_eq!(r.status, 200);
+        assert_eq!(r.body, fs::read(&mesh).unwrap());
+        // Not a mesh file type, not a name the plan gives, or a name leaving mesh/: refused.
+        for bad in [
+            "/mesh/1.txt",
+            "/mesh/2.stl",
+            "/mesh/../2.stl",
+            "/mesh/%2e%2e/2.stl",
+        ] {
+            let r = site.respond(bad);
+            assert_eq!(r.status, 404, "{bad}");
+            assert_ne!(r.body, b"outside", "{bad} leaked a file");
+        }
+        // The plan is read again when it changes.
+        fs::write(
+            &site.plan,
+            r#"{"format":"htngtp-plan","version":1,"scene":{}}"#,
+        )
+        .unwrap();
+        assert_eq!(site.respond("/mesh/0.stl").status, 404);
         fs::remove_dir_all(root).unwrap();
     }
 

@@ -228,21 +228,61 @@ fn collision_mesh(
         .collect())
 }
 
-/// A visual mesh that names no file is a warning: planning does not need it.
-fn check_visuals(ctx: &Ctx, link: &urdf_rs::Link) {
+/// The visual meshes of a link whose files exist; a visual mesh that names no file, or has a
+/// bad scale or origin, is a warning (planning does not need it). Files are not read here.
+fn visuals(ctx: &Ctx, robot: &urdf_rs::Robot, link: &urdf_rs::Link) -> Vec<VisualMesh> {
+    let mut out = Vec::new();
     for v in &link.visual {
-        if let urdf_rs::Geometry::Mesh { filename, .. } = &v.geometry
-            && let Err(e) = mesh_path(ctx, filename)
-        {
-            let line = locate(ctx.text, "link", &link.name)
-                .map(|l| format!(":{l}"))
-                .unwrap_or_default();
-            ctx.warnings.borrow_mut().push(format!(
-                "{}{line}: link '{}': visual {e} (not needed for planning)",
-                ctx.source_name, link.name
-            ));
+        let urdf_rs::Geometry::Mesh { filename, scale } = &v.geometry else {
+            continue;
+        };
+        let scale = scale.as_ref().map(|s| s.0).unwrap_or([1.0; 3]);
+        let found = if !scale.iter().all(|s| s.is_finite() && *s != 0.0) {
+            Err(format!(
+                "mesh '{filename}': scale {scale:?} must be finite and non-zero"
+            ))
+        } else if !finite3(&v.origin.xyz) || !finite3(&v.origin.rpy) {
+            Err(format!("mesh '{filename}': origin has a non-finite number"))
+        } else {
+            mesh_path(ctx, filename)
+        };
+        match found {
+            Ok(path) => out.push(VisualMesh {
+                uri: filename.clone(),
+                path: std::fs::canonicalize(&path).unwrap_or(path),
+                local_pose: to_pose(&v.origin),
+                scale: Vector::new(scale[0] as f32, scale[1] as f32, scale[2] as f32),
+                colour: material_colour(robot, v.material.as_ref()),
+            }),
+            Err(e) => {
+                let line = locate(ctx.text, "link", &link.name)
+                    .map(|l| format!(":{l}"))
+                    .unwrap_or_default();
+                ctx.warnings.borrow_mut().push(format!(
+                    "{}{line}: link '{}': visual {e} (not needed for planning)",
+                    ctx.source_name, link.name
+                ));
+            }
         }
     }
+    out
+}
+
+/// A visual's colour: its material's own `<color>`, else that of the robot's top-level
+/// material of the same name; `None` without one (or with a non-finite number).
+fn material_colour(robot: &urdf_rs::Robot, m: Option<&urdf_rs::Material>) -> Option<[f32; 4]> {
+    let m = m?;
+    let color = m.color.as_ref().or_else(|| {
+        robot
+            .materials
+            .iter()
+            .find(|r| !m.name.is_empty() && r.name == m.name)
+            .and_then(|r| r.color.as_ref())
+    })?;
+    let c = color.rgba.0;
+    c.iter()
+        .all(|x| x.is_finite())
+        .then(|| c.map(|x| x.clamp(0.0, 1.0) as f32))
 }
 
 pub(super) fn load(
@@ -513,7 +553,7 @@ impl Tree {
             for c in &l.collision {
                 collisions.extend(convert_geometry(ctx, &l.name, c)?);
             }
-            check_visuals(ctx, l);
+            let visuals = visuals(ctx, robot, l);
             let parent = parent_joint_of[old]
                 .map(|j| new_index[urdf_link[robot.joints[j].parent.link.as_str()]]);
             links.push(Link {
@@ -522,6 +562,7 @@ impl Tree {
                 parent_joint: parent_joint_of[old].map(|_| new_index[old] - 1),
                 children: children_of[old].iter().map(|&c| new_index[c]).collect(),
                 collisions,
+                visuals,
             });
         }
         Ok(links)
