@@ -176,15 +176,10 @@ pub fn generate_grasps(
                 colliding += 1;
                 continue;
             }
-            let closed = closed_width(gripper, &tool, shape, width, opening);
-            if closed > width + MAX_CLOSING_SLACK {
-                colliding += 1;
-                continue;
-            }
             candidates.push(Grasp {
                 id: 0,
                 tool_in_object: tool,
-                width: closed,
+                width: closed_width(gripper, &tool, shape, width, opening),
                 opening,
                 score,
             });
@@ -220,16 +215,12 @@ pub fn generate_grasps(
     })
 }
 
-/// How much wider than the contacts' distance a grasp's jaws may stay closed (metres): a
-/// closing axis tilted so far that the fingers meet the object's edges sooner (a flat pad
-/// across a flat face) does not hold it by its contacts, and is dropped.
-const MAX_CLOSING_SLACK: f32 = 0.004;
-
 /// The jaw opening at which the fingers, closing on `shape` with the tool at `tool`, stop:
 /// `width` (the contacts' distance) when the gripper's boxes clear the object there, else the
 /// narrowest opening up to `opening` (where they clear) at which they do, to 0.1 mm. Closing
 /// across a tilted axis (inside the friction cone), a flat pad meets a box's edge before
-/// the contact point: held at `width`, it would stand millimetres inside the object.
+/// the contact point: held at `width`, it would stand millimetres inside the object (the
+/// Panda's pads 2 mm inside the POS machine).
 fn closed_width(
     gripper: &GripperModel,
     tool: &Pose,
@@ -552,7 +543,8 @@ mod tests {
                 y.z.abs() > 0.95,
                 "jaws must close across the thickness: {y:?}"
             );
-            assert!((g.width - 0.03).abs() < 0.01);
+            // Closed at the thickness, or wider where a tilted pad meets an edge first.
+            assert!(g.width > 0.029 && g.width <= g.opening, "{}", g.width);
         }
         assert!(
             set.colliding > 0,
