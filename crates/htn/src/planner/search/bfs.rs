@@ -616,6 +616,7 @@ impl<'a, 'o> Search<'a, 'o> {
         if h >= INF {
             return;
         }
+        let task = self.bound_task(m, cell.task, binding);
         let node = Node {
             parent: ni,
             state: sid,
@@ -624,7 +625,7 @@ impl<'a, 'o> Search<'a, 'o> {
             g,
             op: Op::Method {
                 occ: cell.occ,
-                task: cell.task,
+                task,
                 method: m,
                 first: next_occ,
                 n,
