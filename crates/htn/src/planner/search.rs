@@ -88,6 +88,9 @@ struct TreeRec {
     occ: u32,
     /// Ground task id, or `NIL` for the initial task network.
     task: u32,
+    /// The task as the plan names it: `task` with the arguments it left unbound bound by the
+    /// method (`compile/late.rs`).
+    named: u32,
     method: u32,
     first: u32,
     n: u32,
@@ -356,7 +359,7 @@ impl<'a, 'o> Search<'a, 'o> {
 
     /// Binds method `m`'s task parameters to the arguments of ground task `task` in `b`;
     /// `false` when they do not fit (a constant, a type, a repeated parameter). An argument
-    /// left unbound (a parameter of the initial network bound late, `compile/late.rs`) binds
+    /// left unbound (a parameter of the parent method bound late, `compile/late.rs`) binds
     /// nothing: the method's binder binds it.
     fn bind_task_args(&self, m: u32, task: u32, b: &mut [u32]) -> bool {
         let method = &self.c.methods[m as usize];
@@ -449,7 +452,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 plan.root = ids;
                 continue;
             }
-            let (task, args) = names(t.task);
+            let (task, args) = names(t.named);
             plan.decompositions.push(Decomposition {
                 id: t.occ,
                 task,

@@ -1,33 +1,47 @@
-//! The initial task network's parameters bound late. A problem's `:htn` may have parameters
-//! (Woodworking's surfaces and colours of each part, left for the planner to choose). Bound
-//! with the initial network, as a method's parameters are, every one of them is a choice made
-//! before the first action, in the initial state, by type enumeration: a wrong value shows only
-//! when the subtask that reads it is decomposed, and chronological backtracking then goes
-//! through the product of all the values before it (depth first), or the best-first search
-//! seeds one root node per binding of the product.
+//! Parameters bound late. A method's parameter that its task does not give is bound when the
+//! method is applied: by its precondition, or else by type enumeration, in the state where the
+//! method starts. When only a later subtask reads it, that is a choice made too early, blind
+//! to the state the subtask starts in: a wrong value shows only when the subtask is
+//! decomposed, and chronological backtracking then goes through the product of all the values
+//! chosen before it (depth first), or the best-first search generates one successor per
+//! binding of the product. The initial task network is a method too: a problem's `:htn` may
+//! have parameters (Woodworking's surfaces and colours of each part, left to the planner).
 //!
-//! A parameter that appears in one subtask only (once), in no literal of the network's
-//! constraints (after pull-up) is instead left unbound in that subtask: the ground task keeps an
+//! A parameter that is not an argument of the method's task, appears in no literal of its
+//! precondition (after pull-up, so the first subtask's requirements still bind it there) and
+//! once in one subtask only is instead left unbound in that subtask: the ground task keeps an
 //! unbound argument, and the method that decomposes it binds it (from its precondition, in the
 //! state where the subtask starts, or by its own type enumeration). This loses no plan and adds
-//! none: the value is one the method may take there, of the parameter's type (the deferral is
+//! none: the value is one that method may take there, of the parameter's type (the deferral is
 //! made only when every method of the subtask's task takes at that argument either an object of
 //! that type or a parameter whose type has no other objects), and as nothing else reads the
-//! parameter, any value that the method takes is a binding of the network. The plan's
-//! decomposition records the task with the value bound.
+//! parameter, any value the subtask's method takes is a binding of the method. The plan's
+//! decomposition records the subtask with the value bound, from which a verifier finds the
+//! method's binding.
 
 use super::{CTerm, Compiled};
 
-/// Marks the initial task network's parameters that are bound late (see the module docs):
-/// they leave the root method's `bind`.
+/// Marks the parameters bound late (see the module docs): they leave their method's `bind`.
 pub(super) fn bind_late(c: &mut Compiled) {
-    let root = &c.methods[c.root_method as usize];
+    for m in 0..c.methods.len() {
+        let late = late_params(c, m);
+        c.methods[m].bind.retain(|v| !late.contains(v));
+    }
+}
+
+/// The parameters of method `m` bound late: in none of its task's arguments and no literal of
+/// its precondition (after pull-up), once in one subtask, whose task's methods all take there
+/// only objects of the parameter's type.
+fn late_params(c: &Compiled, m: usize) -> Vec<u16> {
+    let method = &c.methods[m];
     let mut late = Vec::new();
-    for &v in &root.params {
-        if root.pre.iter().any(|l| l.vars.contains(&v)) {
+    for &v in &method.params {
+        if method.task_args.contains(&CTerm::Var(v))
+            || method.pre.iter().any(|l| l.vars.contains(&v))
+        {
             continue;
         }
-        let mut uses = root.subtasks.iter().flat_map(|(t, args)| {
+        let mut uses = method.subtasks.iter().flat_map(|(t, args)| {
             args.iter()
                 .enumerate()
                 .filter(move |(_, a)| **a == CTerm::Var(v))
@@ -36,12 +50,11 @@ pub(super) fn bind_late(c: &mut Compiled) {
         let (Some((t, k)), None) = (uses.next(), uses.next()) else {
             continue;
         };
-        if methods_fit(c, t, k, root.slot_types[v as usize]) {
+        if methods_fit(c, t, k, method.slot_types[v as usize]) {
             late.push(v);
         }
     }
-    let root = &mut c.methods[c.root_method as usize];
-    root.bind.retain(|v| !late.contains(v));
+    late
 }
 
 /// Whether task `t` is abstract and every one of its methods takes at argument `k` only

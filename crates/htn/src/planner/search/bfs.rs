@@ -703,6 +703,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 Op::Root { first, n } => self.tree.push(TreeRec {
                     occ: NIL,
                     task: NIL,
+                    named: NIL,
                     method: self.c.root_method,
                     first,
                     n,
@@ -724,6 +725,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 } => self.tree.push(TreeRec {
                     occ,
                     task,
+                    named: task,
                     method,
                     first,
                     n,
