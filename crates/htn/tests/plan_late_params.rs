@@ -1,9 +1,9 @@
-//! A method's parameters (and the initial task network's, `(:htn :parameters ...)`) that one
-//! subtask alone uses are bound by that subtask's method, in the state where it starts, not by
-//! type enumeration when the method is applied (`planner/compile/late.rs`). Here every part
-//! needs its own surface, known from the state: bound late, the search never backtracks; the
-//! plan's decompositions record the values bound. A parameter two subtasks share, or whose
-//! methods could give it a value outside its type, is still bound with the network.
+//! The initial task network's parameters (`(:htn :parameters ...)`) that one subtask alone
+//! uses are bound by that subtask's method, in the state where it starts, not by type
+//! enumeration with the network (`planner/compile/late.rs`). Here every part needs its own
+//! surface, known from the state: bound late, the search never backtracks; the plan's
+//! decompositions record the values bound. A parameter two subtasks share, or whose methods
+//! could give it a value outside its type, is still bound with the network.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -17,9 +17,6 @@ const DOMAIN: &str = "(define (domain late)
   (:types part surface - object good - surface)
   (:predicates (surface-of ?p - part ?s - surface) (done ?p - part))
   (:task fix :parameters (?p - part ?s - surface))
-  (:task fix-two :parameters (?p ?q - part))
-  (:method m-two :parameters (?p ?q - part ?x ?y - surface) :task (fix-two ?p ?q)
-    :ordered-subtasks (and (fix ?p ?x) (fix ?q ?y)))
   (:method m-fix :parameters (?p - part ?s - surface) :task (fix ?p ?s)
     :precondition (surface-of ?p ?s)
     :ordered-subtasks (and (treat ?p ?s)))
@@ -114,26 +111,4 @@ fn a_parameter_of_a_narrower_type_than_its_methods_take_is_bound_with_the_networ
         r.outcome
     );
     assert_eq!(lines, ["fix a0 g -> m-fix"]);
-}
-
-#[test]
-fn a_method_parameter_one_subtask_uses_is_bound_by_that_subtask_method() {
-    // `m-two`'s `?x ?y` (no precondition reads them): bound when `m-two` is applied, the right
-    // pair would be the last of 13^2; bound late, each comes from the state.
-    let htn = ":ordered-subtasks (and (fix-two a0 a1))";
-    let (r, lines) = solve(&problem(2, 12, htn, ""));
-    assert!(
-        matches!(r.outcome, Outcome::Found { .. }),
-        "{:?}",
-        r.outcome
-    );
-    assert_eq!(r.stats.htn_backtracks, 0);
-    assert_eq!(
-        lines,
-        [
-            "fix-two a0 a1 -> m-two",
-            "fix a0 s11 -> m-fix",
-            "fix a1 s10 -> m-fix"
-        ]
-    );
 }
