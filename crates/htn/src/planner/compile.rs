@@ -9,6 +9,8 @@
 //!   numbered slots;
 //! - `statics.rs`: the predicates no action changes;
 //! - `pull_up.rs`: precondition pull-up (methods gain what their subtasks require);
+//! - `late.rs`: the initial task network's parameters bound late, by the method of the one
+//!   subtask that uses them;
 //! - `goals.rs`: the goal's literals and landmarks, and what each task may achieve of them.
 
 use std::collections::HashMap;
@@ -19,12 +21,14 @@ use super::PlanError;
 use crate::budget::Watch;
 
 mod goals;
+mod late;
 mod lower;
 mod names;
 mod pull_up;
 mod statics;
 
 use goals::goal_relevance;
+use late::bind_late;
 use lower::Scope;
 pub(crate) use lower::free_vars;
 use pull_up::pull_up;
@@ -101,6 +105,10 @@ pub(crate) struct CMethod {
     pub n_params: usize,
     /// The parameter slots, `0..n_params`.
     pub params: Vec<u16>,
+    /// The parameters the search binds when it applies the method: all of them but, for the
+    /// initial task network, those left to the one subtask that uses them (`late.rs`), which
+    /// stay unbound in the subtask until one of its methods binds them.
+    pub bind: Vec<u16>,
     pub slot_types: Vec<u32>,
     /// Precondition and constraints as one conjunction.
     pub pre: Vec<CLit>,
@@ -286,6 +294,7 @@ pub(crate) fn compile(
     b.c.goal_slot_types = scope.types;
     b.c.static_preds = static_predicates(&b.c);
     pull_up(&mut b.c);
+    bind_late(&mut b.c);
     goal_relevance(&mut b.c);
     Ok(b.c)
 }

@@ -25,6 +25,11 @@
 //!   climbing through abstract tasks (a task requires what every one of its methods requires
 //!   over its arguments), so bindings fail early and bind through static facts (indexed by
 //!   argument);
+//! - *late binding* (`compile/late.rs`): a parameter of the problem's `:htn` that the
+//!   network's constraints do not read and that one subtask alone uses is left unbound in that
+//!   subtask and bound by the subtask's method, in the state where it starts, instead of by
+//!   type enumeration before the first action (where a wrong value shows only when the subtask
+//!   is reached, and chronological backtracking goes through every value chosen before it);
 //! - *goal relevance* (`search/relevance.rs`): each suffix of the task network carries the
 //!   set of goal literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is

@@ -88,6 +88,9 @@ struct TreeRec {
     occ: u32,
     /// Ground task id, or `NIL` for the initial task network.
     task: u32,
+    /// The task as the plan names it: `task` with the arguments it left unbound bound by the
+    /// method (`compile/late.rs`).
+    named: u32,
     method: u32,
     first: u32,
     n: u32,
@@ -346,23 +349,18 @@ impl<'a, 'o> Search<'a, 'o> {
             types: &method.slot_types,
         };
         let poll = || self.watch.check().is_some();
-        let (_, more) = ev.solve_from(
-            &method.pre,
-            &mut b,
-            &method.params,
-            after,
-            &poll,
-            &mut |bb| {
-                out.extend_from_slice(&bb[..n]);
-                count += 1;
-                count >= max
-            },
-        );
+        let (_, more) = ev.solve_from(&method.pre, &mut b, &method.bind, after, &poll, &mut |bb| {
+            out.extend_from_slice(&bb[..n]);
+            count += 1;
+            count >= max
+        });
         (out, count, more)
     }
 
     /// Binds method `m`'s task parameters to the arguments of ground task `task` in `b`;
-    /// `false` when they do not fit (a constant, a type, a repeated parameter).
+    /// `false` when they do not fit (a constant, a type, a repeated parameter). An argument
+    /// left unbound (a parameter of the parent method bound late, `compile/late.rs`) binds
+    /// nothing: the method's binder binds it.
     fn bind_task_args(&self, m: u32, task: u32, b: &mut [u32]) -> bool {
         let method = &self.c.methods[m as usize];
         let args = &self.gtasks.key(task)[1..];
@@ -370,6 +368,9 @@ impl<'a, 'o> Search<'a, 'o> {
             return false;
         }
         for (t, &a) in method.task_args.iter().zip(args) {
+            if a == UNBOUND {
+                continue;
+            }
             match *t {
                 CTerm::Obj(o) if o != a => return false,
                 CTerm::Obj(_) => {}
@@ -387,6 +388,22 @@ impl<'a, 'o> Search<'a, 'o> {
             }
         }
         true
+    }
+
+    /// Ground task `task` as method `m` decomposes it under `binding`: itself, or, when it
+    /// has arguments left unbound (`compile/late.rs`), the task with the values the method
+    /// bound there (what the plan's decomposition records).
+    fn bound_task(&mut self, m: u32, task: u32, binding: &[u32]) -> u32 {
+        if task == NIL || !self.gtasks.key(task)[1..].contains(&UNBOUND) {
+            return task;
+        }
+        let method = &self.c.methods[m as usize];
+        let mut key = vec![method.task];
+        key.extend(method.task_args.iter().map(|a| match *a {
+            CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
+            CTerm::Obj(o) => o,
+        }));
+        self.gtasks.intern(&key)
     }
 
     /// The slots of action `a` bound to the arguments of ground task `task`, if their types fit.
@@ -435,7 +452,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 plan.root = ids;
                 continue;
             }
-            let (task, args) = names(t.task);
+            let (task, args) = names(t.named);
             plan.decompositions.push(Decomposition {
                 id: t.occ,
                 task,

@@ -244,6 +244,7 @@ impl Builder<'_> {
             task_args,
             n_params: params.len(),
             params: (0..params.len() as u16).collect(),
+            bind: (0..params.len() as u16).collect(),
             slot_types: scope.types,
             pre,
             subtasks: subs,

@@ -616,6 +616,7 @@ impl<'a, 'o> Search<'a, 'o> {
         if h >= INF {
             return;
         }
+        let task = self.bound_task(m, cell.task, binding);
         let node = Node {
             parent: ni,
             state: sid,
@@ -624,7 +625,7 @@ impl<'a, 'o> Search<'a, 'o> {
             g,
             op: Op::Method {
                 occ: cell.occ,
-                task: cell.task,
+                task,
                 method: m,
                 first: next_occ,
                 n,
@@ -702,6 +703,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 Op::Root { first, n } => self.tree.push(TreeRec {
                     occ: NIL,
                     task: NIL,
+                    named: NIL,
                     method: self.c.root_method,
                     first,
                     n,
@@ -723,6 +725,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 } => self.tree.push(TreeRec {
                     occ,
                     task,
+                    named: task,
                     method,
                     first,
                     n,

@@ -299,6 +299,7 @@ impl<'a, 'o> Search<'a, 'o> {
     pub(super) fn apply_method(&mut self, h: HtnId, m: u32, binding: &[u32]) {
         let f = &self.htn_frames[h];
         let (occ, task, rest, parent) = (f.occ, f.task, f.rest, f.parent);
+        let named = self.bound_task(m, task, binding);
         let method = &self.c.methods[m as usize];
         let first = self.next_occ;
         let n = method.subtasks.len() as u32;
@@ -306,6 +307,7 @@ impl<'a, 'o> Search<'a, 'o> {
         self.tree.push(TreeRec {
             occ,
             task,
+            named,
             method: m,
             first,
             n,
