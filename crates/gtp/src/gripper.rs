@@ -30,6 +30,9 @@ use parry3d::shape::{Cuboid, Shape, SharedShape};
 /// less is used to its own limit.
 pub const OPENING_CAP: f32 = 0.09;
 
+/// A gripper's boxes (pose in the tool frame, half extents) per jaw opening (its bits).
+type BoxesByOpening = HashMap<u32, Vec<(Pose, Cuboid)>>;
+
 /// The most jaw openings whose boxes a gripper keeps (the grasp widths of a scene's objects
 /// are far fewer).
 const MAX_CACHED_OPENINGS: usize = 4096;
@@ -84,7 +87,7 @@ pub struct GripperModel {
     key: u64,
     /// The boxes per jaw opening (its bits) already computed, for grippers with shapes boxed
     /// where the opening puts them (their bounding boxes visit every vertex of a mesh).
-    by_opening: Option<Arc<Mutex<HashMap<u32, Vec<(Pose, Cuboid)>>>>>,
+    by_opening: Option<Arc<Mutex<BoxesByOpening>>>,
 }
 
 impl GripperModel {
