@@ -163,35 +163,65 @@ fn the_real_grippers_turning_fingers_give_grasps() {
     assert!(grasps > 0, "no grasp for the real gripper: {json}");
 }
 
-/// The shipped `scene-real-pr2.toml`, and `scene.toml` with its robot's lines taken out.
-fn shipped_real_pr2_and_library_without_robots() -> (String, String) {
-    let lib = root().join("domains/library");
-    let without_pr2 = |t: &str| {
-        let start = t.find("[[agents]]\nname = \"pr2\"").expect("a pr2 agent");
-        let end = start
-            + t[start + 1..]
-                .find("[[agents]]")
-                .expect("an agent after pr2")
-            + 1;
-        let body = t[..start].to_string() + &t[end..];
-        // The header comment and the [scene] name and package path say which robot it is.
-        let from = body
-            .find("# ---- furniture")
-            .expect("the furniture section");
-        body[from..].to_string()
-    };
-    let real = std::fs::read_to_string(lib.join("scene-real-pr2.toml")).unwrap();
-    let ours = std::fs::read_to_string(lib.join("scene.toml")).unwrap();
-    (without_pr2(&real), without_pr2(&ours))
+/// The shipped library scenes with the hand-written PR2 and their versions with the real one.
+const REAL_PR2_SCENES: [(&str, &str); 3] = [
+    ("scene.toml", "scene-real-pr2.toml"),
+    ("cluttered-desk.toml", "cluttered-desk-real-pr2.toml"),
+    ("scene-far-pos.toml", "scene-far-pos-real-pr2.toml"),
+];
+
+/// A scene's text split into its `pr2` agent (from its `[[agents]]` line to the next agent's)
+/// and the rest from its `[scene]` table on, without the lines that say which robot it is
+/// (the scene's `name` and `package_path`): the header comment above `[scene]` is left out.
+fn split_pr2(text: &str) -> (String, String) {
+    let start = text
+        .find("[[agents]]\nname = \"pr2\"")
+        .expect("a pr2 agent");
+    let end = start
+        + text[start + 1..]
+            .find("[[agents]]")
+            .expect("an agent after pr2")
+        + 1;
+    let body = text[..start].to_string() + &text[end..];
+    let from = body.find("[scene]").expect("a [scene] table");
+    let mut in_scene_table = false;
+    let rest = body[from..]
+        .lines()
+        .filter(|l| {
+            if l.starts_with('[') {
+                in_scene_table = *l == "[scene]";
+            }
+            !(in_scene_table && (l.starts_with("name = ") || l.starts_with("package_path = ")))
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    (text[start..end].to_string(), rest)
 }
 
 #[test]
-fn the_real_pr2_library_scene_is_the_library_but_its_robot() {
-    let (real, ours) = shipped_real_pr2_and_library_without_robots();
-    assert_eq!(
-        real, ours,
-        "domains/library/scene-real-pr2.toml and scene.toml differ outside the robot"
-    );
+fn the_real_pr2_library_scenes_are_the_library_scenes_but_their_robot() {
+    let lib = root().join("domains/library");
+    let read = |name: &str| {
+        std::fs::read_to_string(lib.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let mut robots = Vec::new();
+    for (ours, real) in REAL_PR2_SCENES {
+        let (_, ours_rest) = split_pr2(&read(ours));
+        let (robot, real_rest) = split_pr2(&read(real));
+        assert_eq!(
+            real_rest, ours_rest,
+            "domains/library/{real} and {ours} differ outside the robot"
+        );
+        assert!(robot.contains("pr2_description/urdf/robot.xml"), "{real}");
+        robots.push((real, robot));
+    }
+    // One real PR2 in all of them (its station, posture and decomposed links).
+    for (real, robot) in &robots[1..] {
+        assert_eq!(
+            robot, &robots[0].1,
+            "the real PR2 of {real} differs from scene-real-pr2.toml's"
+        );
+    }
 }
 
 #[test]

@@ -19,8 +19,10 @@
 //!   [`CollisionChecker::first_collision`] / [`CollisionChecker::collisions`] (which pair).
 //!
 //! A check runs forward kinematics once, poses every shape, then tests shape AABBs against the
-//! obstacles' AABBs (broad phase) and bounding spheres for self pairs before parry's exact
-//! intersection test (narrow phase). Whether shapes exactly touching (distance 0) count as
+//! obstacles' AABBs (broad phase) and, for self pairs, the bounding spheres of the two links and
+//! then of the two shapes, before parry's exact intersection test (narrow phase). A convex
+//! polyhedron (a mesh's hull or piece, whose exact test and AABB visit every vertex) has its AABB
+//! from its bounding box in its own frame, and that box is tested first in the narrow phase. Whether shapes exactly touching (distance 0) count as
 //! colliding is up to parry's tests and rounding; design shapes with a small gap instead.
 //!
 //! Obstacles that touch the agent by design must be kept out of the set: a floor should lie just
@@ -385,7 +387,8 @@ struct FixedJoints {
     shape_poses: Vec<Pose>,
     shape_aabbs: Vec<Aabb>,
     moving_shapes: Vec<u16>,
-    moving_pairs: Vec<(u16, u16)>,
+    /// The pairs of links (groups of [`SelfCollisionModel`]'s pairs) of which one moves.
+    moving_groups: Vec<self_collision::PairGroup>,
     /// Collisions among the unmoving shapes and between them and the obstacles.
     static_hits: Vec<Hit>,
 }
@@ -453,16 +456,16 @@ impl CollisionChecker {
         let shape_aabbs = shapes
             .iter()
             .zip(&shape_poses)
-            .map(|(s, p)| s.shape.compute_aabb(p))
+            .map(|(s, p)| s.aabb(p))
             .collect();
         let moving = |i: u16| moving_link[shapes[i as usize].link];
         let moving_shapes = (0..shapes.len() as u16).filter(|&i| moving(i)).collect();
-        let moving_pairs = self
+        let moving_groups = self
             .agent
-            .pairs
+            .groups
             .iter()
             .copied()
-            .filter(|&(a, b)| moving(a) || moving(b))
+            .filter(|g| moving_link[g.a as usize] || moving_link[g.b as usize])
             .collect();
         // Collisions of the unmoving part, found once with a full check of the template.
         let mut static_hits = Vec::new();
@@ -488,7 +491,7 @@ impl CollisionChecker {
             shape_poses,
             shape_aabbs,
             moving_shapes,
-            moving_pairs,
+            moving_groups,
             static_hits,
         }));
     }
@@ -684,7 +687,7 @@ impl CollisionChecker {
             let model = &self.agent.model;
             let shapes = &self.agent.shapes;
             let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
-            let (moving, pairs): (&[u16], &[(u16, u16)]) = match fixed {
+            let (moving, groups): (&[u16], &[self_collision::PairGroup]) = match fixed {
                 Some(f) => {
                     for &h in &f.static_hits {
                         if report(h) {
@@ -706,9 +709,9 @@ impl CollisionChecker {
                     for &i in &f.moving_shapes {
                         let (i, s) = (i as usize, &shapes[i as usize]);
                         poses[i] = links[s.link] * s.local_pose;
-                        aabbs[i] = s.shape.compute_aabb(&poses[i]);
+                        aabbs[i] = s.aabb(&poses[i]);
                     }
-                    (&f.moving_shapes, &f.moving_pairs)
+                    (&f.moving_shapes, &f.moving_groups)
                 }
                 None => {
                     model.link_poses_into(self.base, q, links);
@@ -717,9 +720,9 @@ impl CollisionChecker {
                     for s in shapes {
                         let p = links[s.link] * s.local_pose;
                         poses.push(p);
-                        aabbs.push(s.shape.compute_aabb(&p));
+                        aabbs.push(s.aabb(&p));
                     }
-                    (&self.agent.all_shapes, &self.agent.pairs)
+                    (&self.agent.all_shapes, &self.agent.groups)
                 }
             };
             // Agent against the scene: first the obstacles near the moving shapes, then per shape.
@@ -737,12 +740,7 @@ impl CollisionChecker {
                         let o = o as usize;
                         let obstacle = &self.obstacles.obstacles[o];
                         if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
-                            && intersects(
-                                &poses[i],
-                                &*s.shape.0,
-                                &obstacle.pose,
-                                &*obstacle.shape.0,
-                            )
+                            && s.hits(&poses[i], &*obstacle.shape.0, &obstacle.pose)
                             && report(Hit::Obstacle(i, o))
                         {
                             return;
@@ -752,23 +750,28 @@ impl CollisionChecker {
             }
             // Self-collision.
             if self.self_collision {
-                for &(a, b) in pairs {
-                    let (a, b) = (a as usize, b as usize);
-                    let r = shapes[a].radius + shapes[b].radius;
-                    if (poses[a].translation - poses[b].translation).length_squared() > r * r {
+                let spheres = &self.agent.link_spheres;
+                let pairs = &self.agent.pairs;
+                for g in groups {
+                    let ((ca, ra), (cb, rb)) = (spheres[g.a as usize], spheres[g.b as usize]);
+                    let d = links[g.a as usize] * ca - links[g.b as usize] * cb;
+                    if d.length_squared() > (ra + rb) * (ra + rb) {
                         continue;
                     }
-                    if !aabb_overlap(&aabbs[a], &aabbs[b]) {
-                        continue;
-                    }
-                    if intersects(
-                        &poses[a],
-                        &*shapes[a].shape.0,
-                        &poses[b],
-                        &*shapes[b].shape.0,
-                    ) && report(Hit::SelfPair(a, b))
-                    {
-                        return;
+                    for &(a, b) in &pairs[g.start as usize..g.end as usize] {
+                        let (a, b) = (a as usize, b as usize);
+                        let r = shapes[a].radius + shapes[b].radius;
+                        if (poses[a].translation - poses[b].translation).length_squared() > r * r {
+                            continue;
+                        }
+                        if !aabb_overlap(&aabbs[a], &aabbs[b]) {
+                            continue;
+                        }
+                        if shapes[a].hits_shape(&poses[a], &shapes[b], &poses[b])
+                            && report(Hit::SelfPair(a, b))
+                        {
+                            return;
+                        }
                     }
                 }
             }
@@ -793,9 +796,7 @@ impl CollisionChecker {
                     {
                         continue;
                     }
-                    if intersects(&poses[i], &*s.shape.0, &p, &*held.shape.0)
-                        && report(Hit::HeldShape(k, i))
-                    {
+                    if s.hits(&poses[i], &*held.shape.0, &p) && report(Hit::HeldShape(k, i)) {
                         return;
                     }
                 }

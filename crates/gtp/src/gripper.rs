@@ -4,20 +4,24 @@
 //!
 //! The boxes come from the robot's own model ([`GripperModel::of_arm`]): the collision shapes of
 //! the links of the arm's SRDF end effector (the links of its group's joints and the link they
-//! hang from: the palm and the fingers), each as its oriented bounding box, placed in the tool
-//! frame by the URDF's joints with the fingers where a jaw opening puts them (each finger's
+//! hang from: the palm and the fingers), placed in the tool frame by the URDF's joints with the fingers where a jaw opening puts them (each finger's
 //! joint at half the opening, as [`crate::robot::set_opening`] drives it). A box shape is its own
-//! box; other shapes are boxed, which only widens the pre-check.
+//! box; any other shape (a mesh's convex pieces) is boxed by its bounding box in the tool frame
+//! where the opening puts it, which only widens the pre-check, and stays tight as a turning
+//! finger swings (the bounding box of the finger's own frame, turned with it, would reach across
+//! the jaws and out beyond the finger).
 //!
 //! Convention (a gripper tool frame as ROS robots define it): x points forward out of the palm (the
 //! approach direction), y is the axis along which the two fingers close, z completes the frame.
 
+use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Mutex};
 
 use geometry::agent::{AgentModel, Joint};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::shape::{Cuboid, Shape};
+use parry3d::shape::{Cuboid, Shape, SharedShape};
 
 /// The widest jaw opening the planner uses (metres), whatever a gripper allows: the objects of
 /// the shipped scenes are shaped for it (the PR2's 9 cm). Opened wider, the Fetch-like robot's
@@ -26,11 +30,22 @@ use parry3d::shape::{Cuboid, Shape};
 /// less is used to its own limit.
 pub const OPENING_CAP: f32 = 0.09;
 
-/// A box of the gripper: where it sits in its link, and its half extents.
+/// A gripper's boxes (pose in the tool frame, half extents) per jaw opening (its bits).
+type BoxesByOpening = HashMap<u32, Vec<(Pose, Cuboid)>>;
+
+/// The most jaw openings whose boxes a gripper keeps (the grasp widths of a scene's objects
+/// are far fewer).
+const MAX_CACHED_OPENINGS: usize = 4096;
+
+/// A collision shape of a gripper link, as the pre-check boxes it: a box shape is its own
+/// (oriented) box; any other shape is boxed where the opening puts it, by its bounding box in
+/// the tool frame (`shape`, at `in_link`), which stays tight as a turning finger swings.
 #[derive(Clone, Debug)]
 struct LinkBox {
     in_link: Pose,
     cuboid: Cuboid,
+    /// The shape itself when it is not a box.
+    shape: Option<SharedShape>,
 }
 
 /// How a joint between the gripper's root and one of its links takes its value from the
@@ -70,6 +85,9 @@ pub struct GripperModel {
     /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
     /// by it).
     key: u64,
+    /// The boxes per jaw opening (its bits) already computed, for grippers with shapes boxed
+    /// where the opening puts them (their bounding boxes visit every vertex of a mesh).
+    by_opening: Option<Arc<Mutex<BoxesByOpening>>>,
 }
 
 impl GripperModel {
@@ -107,6 +125,7 @@ impl GripperModel {
             opening_range: range,
             turns: Vec::new(),
             key: 0,
+            by_opening: None,
         };
         if let Some(k) = dof
             && model.joints()[model.dof_joint(k)].kind != geometry::agent::JointKind::Prismatic
@@ -114,6 +133,13 @@ impl GripperModel {
             gripper.measure_turns(model.dof_limits()[k]);
         }
         gripper.key = gripper.dimensions_key();
+        if gripper
+            .links
+            .iter()
+            .any(|l| l.boxes.iter().any(|b| b.shape.is_some()))
+        {
+            gripper.by_opening = Some(Arc::default());
+        }
         gripper
     }
 
@@ -134,7 +160,18 @@ impl GripperModel {
     /// finger joint's range.
     pub fn at(&self, opening: f32) -> Gripper {
         let opening = opening.clamp(self.opening_range.0, self.opening_range.1);
-        let boxes = self.boxes_at_value(self.joint_value(opening));
+        let Some(cache) = &self.by_opening else {
+            let boxes = self.boxes_at_value(self.joint_value(opening));
+            return Gripper { boxes, opening };
+        };
+        let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= MAX_CACHED_OPENINGS {
+            cache.clear();
+        }
+        let boxes = cache
+            .entry(opening.to_bits())
+            .or_insert_with(|| self.boxes_at_value(self.joint_value(opening)))
+            .clone();
         Gripper { boxes, opening }
     }
 
@@ -167,7 +204,7 @@ impl GripperModel {
         let mut boxes = Vec::new();
         for link in &self.links {
             let pose = to_tool * pose_along(&link.path, value);
-            boxes.extend(link.boxes.iter().map(|b| (pose * b.in_link, b.cuboid)));
+            boxes.extend(link.boxes.iter().map(|b| b.at(pose)));
         }
         boxes
     }
@@ -211,7 +248,8 @@ impl GripperModel {
         {
             let pose = to_tool * pose_along(&link.path, value);
             for b in &link.boxes {
-                let aabb = b.cuboid.compute_aabb(&(pose * b.in_link));
+                let (at, cuboid) = b.at(pose);
+                let aabb = cuboid.compute_aabb(&at);
                 let (side, face) = if aabb.center().y >= 0.0 {
                     (&mut left, aabb.mins.y)
                 } else {
@@ -333,14 +371,40 @@ fn link_boxes(model: &AgentModel, link: usize) -> Vec<LinkBox> {
     model.links()[link]
         .collisions
         .iter()
-        .map(|c| {
-            let aabb = c.shape.compute_local_aabb();
-            LinkBox {
-                in_link: c.local_pose * Pose::from_translation(aabb.center()),
-                cuboid: Cuboid::new(aabb.half_extents()),
+        .map(|c| match c.shape.as_cuboid() {
+            Some(cuboid) => LinkBox {
+                in_link: c.local_pose,
+                cuboid: *cuboid,
+                shape: None,
+            },
+            None => {
+                let aabb = c.shape.compute_local_aabb();
+                LinkBox {
+                    in_link: c.local_pose,
+                    cuboid: Cuboid::new(aabb.half_extents()),
+                    shape: Some(c.shape.clone()),
+                }
             }
         })
         .collect()
+}
+
+impl LinkBox {
+    /// The box (its pose in the tool frame, its half extents) with the link at `link` in the
+    /// tool frame.
+    fn at(&self, link: Pose) -> (Pose, Cuboid) {
+        let pose = link * self.in_link;
+        match &self.shape {
+            None => (pose, self.cuboid),
+            Some(shape) => {
+                let aabb = shape.compute_aabb(&pose);
+                (
+                    Pose::from_translation(aabb.center()),
+                    Cuboid::new(aabb.half_extents()),
+                )
+            }
+        }
+    }
 }
 
 /// The pose a joint path puts its link at (in the path's root frame) with the finger joint at
@@ -465,9 +529,14 @@ pub(crate) mod tests {
     /// A one-joint arm ending in a palm with two fingers on revolute joints (the second
     /// mimicking the first), each with a 1 cm pad 8 cm ahead of its knuckle.
     fn turning_finger_model() -> AgentModel {
+        turning_finger_model_with(r#"<box size="0.02 0.01 0.02"/>"#)
+    }
+
+    /// [`turning_finger_model`] with each pad the geometry `pad` (URDF) 8 cm ahead of its knuckle.
+    fn turning_finger_model_with(pad: &str) -> AgentModel {
         let finger = |side: &str, y: f32, axis: f32, mimic: &str| {
             format!(
-                r#"<link name="{side}_finger"><collision><origin xyz="0.08 0 0"/><geometry><box size="0.02 0.01 0.02"/></geometry></collision></link>
+                r#"<link name="{side}_finger"><collision><origin xyz="0.08 0 0"/><geometry>{pad}</geometry></collision></link>
                 <joint name="{side}_finger_joint" type="revolute"><parent link="palm"/><child link="{side}_finger"/>
                   <origin xyz="0.02 {y} 0"/><axis xyz="0 0 {axis}"/><limit lower="0" upper="0.5" effort="1" velocity="1"/>{mimic}</joint>"#
             )
@@ -512,6 +581,39 @@ pub(crate) mod tests {
             hi.y - lo.y
         };
         assert!(span(0.07) > span(0.03) + 0.03);
+    }
+
+    #[test]
+    fn a_turning_finger_that_is_no_box_is_boxed_where_it_is() {
+        // Ball pads (1 cm radius): whatever the finger's turn, each pad's box is the ball's own
+        // bounds in the tool frame, a 2 cm cube around it. Boxed in the finger's frame and
+        // turned with it, the box would be wider by up to 41 % (its corners swung out), reaching
+        // across the jaws and out beyond the finger.
+        let model = turning_finger_model_with(r#"<sphere radius="0.01"/>"#);
+        let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
+        let value = 0.4;
+        let opening = gripper
+            .finger_gap(value)
+            .expect("pads on both sides of the jaws");
+        let at = gripper.at(opening);
+        let pads: Vec<_> = at
+            .boxes
+            .iter()
+            .filter(|(_, c)| (c.half_extents - Vector::splat(0.01)).abs().max_element() < 1e-6)
+            .collect();
+        assert_eq!(pads.len(), 2, "{:?}", at.boxes);
+        for (pose, _) in pads {
+            // Upright and centred on the pad, which has swung out by 0.08 sin 0.4 (the knuckles
+            // 1.5 cm off the centre line).
+            assert!(pose.rotation.to_axis_angle().1.abs() < 1e-6, "{pose:?}");
+            let y = pose.translation.y.abs();
+            assert!((y - (0.015 + 0.08 * value.sin())).abs() < 1e-4, "{pose:?}");
+        }
+        // The same boxes again (remembered per opening).
+        assert_eq!(
+            format!("{:?}", gripper.at(opening).boxes),
+            format!("{:?}", at.boxes)
+        );
     }
 
     #[test]

@@ -5,8 +5,9 @@
 use std::fmt;
 use std::sync::Arc;
 
-use parry3d::math::Pose;
-use parry3d::shape::SharedShape;
+use parry3d::bounding_volume::Aabb;
+use parry3d::math::{Pose, Vector};
+use parry3d::shape::{Cuboid, Shape, SharedShape};
 
 use super::intersects;
 use crate::agent::{AgentModel, ModelError};
@@ -94,6 +95,10 @@ pub struct AllowedPair {
     pub reason: AllowedReason,
 }
 
+/// How much a polyhedron's bounding box is widened (metres): shapes that touch (distance 0,
+/// which parry's exact test may count as contact) are never separated by their boxes alone.
+const BOUNDS_MARGIN: f32 = 1e-4;
+
 /// One collision shape of the agent, flattened out of its link.
 #[derive(Clone)]
 pub(super) struct ShapeEntry {
@@ -101,6 +106,72 @@ pub(super) struct ShapeEntry {
     pub(super) local_pose: Pose,
     pub(super) shape: SharedShape,
     pub(super) radius: f32,
+    /// For a shape costly to test (a convex polyhedron, whose support function visits every
+    /// vertex): its bounding box in its own frame, tested first (see [`ShapeEntry::hits`]).
+    pub(super) bounds: Option<(Pose, Cuboid)>,
+}
+
+impl ShapeEntry {
+    fn new(link: usize, local_pose: Pose, shape: SharedShape, radius: f32) -> ShapeEntry {
+        let bounds = shape.as_convex_polyhedron().map(|_| {
+            let aabb = shape.compute_local_aabb();
+            (
+                Pose::from_translation(aabb.center()),
+                Cuboid::new(aabb.half_extents() + Vector::splat(BOUNDS_MARGIN)),
+            )
+        });
+        ShapeEntry {
+            link,
+            local_pose,
+            shape,
+            radius,
+            bounds,
+        }
+    }
+
+    /// The shape's world AABB at `pose`: for a polyhedron, that of its bounding box (a few
+    /// operations, where the exact one visits every vertex).
+    pub(super) fn aabb(&self, pose: &Pose) -> Aabb {
+        match &self.bounds {
+            Some((at, cuboid)) => cuboid.compute_aabb(&(*pose * *at)),
+            None => self.shape.compute_aabb(pose),
+        }
+    }
+
+    /// Whether the shape at `pose` intersects `other` at `other_pose`: its bounding box first
+    /// (a separating-axis test against a box), which rules out most pairs whose AABBs overlap,
+    /// then the exact shapes. The box holds the shape: where it is apart from `other`, so is
+    /// the shape (parry's GJK test between polyhedra of hundreds of vertices may report contact
+    /// at a few millimetres of distance; the box does not).
+    pub(super) fn hits(&self, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> bool {
+        if let Some((at, cuboid)) = &self.bounds
+            && !intersects(&(*pose * *at), cuboid, other_pose, other)
+        {
+            return false;
+        }
+        intersects(pose, &*self.shape.0, other_pose, other)
+    }
+
+    /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.
+    pub(super) fn hits_shape(&self, pose: &Pose, other: &ShapeEntry, other_pose: &Pose) -> bool {
+        if let Some((at, cuboid)) = &other.bounds
+            && !self.hits(pose, cuboid, &(*other_pose * *at))
+        {
+            return false;
+        }
+        self.hits(pose, &*other.shape.0, other_pose)
+    }
+}
+
+/// A pair of links whose shapes are tested against each other: links `a < b`, their shape
+/// pairs `pairs[start..end]`. The links' spheres are tested first, which rules most pairs of
+/// links out at once.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PairGroup {
+    pub(super) a: u16,
+    pub(super) b: u16,
+    pub(super) start: u32,
+    pub(super) end: u32,
 }
 
 /// An agent model's collision shapes and its self-collision pair list. Build once per model.
@@ -108,8 +179,13 @@ pub(super) struct ShapeEntry {
 pub struct SelfCollisionModel {
     pub(super) model: Arc<AgentModel>,
     pub(super) shapes: Vec<ShapeEntry>,
-    /// Shape index pairs to test for self-collision.
+    /// Shape index pairs to test for self-collision, those of one pair of links together.
     pub(super) pairs: Vec<(u16, u16)>,
+    /// The pairs of links to test, each with its run of `pairs` (see [`PairGroup`]).
+    pub(super) groups: Vec<PairGroup>,
+    /// Per link, the sphere (centre in the link's frame, radius) that holds its shapes; a
+    /// radius below 0 for a link without shapes.
+    pub(super) link_spheres: Vec<(Vector, f32)>,
     /// 0, 1, .. shapes.len() - 1.
     pub(super) all_shapes: Vec<u16>,
     allowed: Vec<AllowedPair>,
@@ -132,15 +208,19 @@ impl SelfCollisionModel {
         let mut shapes = Vec::new();
         for (i, link) in model.links().iter().enumerate() {
             for c in &link.collisions {
-                shapes.push(ShapeEntry {
-                    link: i,
-                    local_pose: c.local_pose,
-                    shape: c.shape.clone(),
-                    radius: c.bounding_radius,
-                });
+                shapes.push(ShapeEntry::new(
+                    i,
+                    c.local_pose,
+                    c.shape.clone(),
+                    c.bounding_radius,
+                ));
             }
         }
         let nl = model.links().len();
+        let mut by_link = vec![Vec::new(); nl];
+        for (i, e) in shapes.iter().enumerate() {
+            by_link[e.link].push(i);
+        }
         // Link-level pair status: None = check, Some(reason) = ignore.
         let mut status: Vec<Option<AllowedReason>> = vec![None; nl * nl];
         let key = |a: usize, b: usize| a.min(b) * nl + a.max(b);
@@ -177,7 +257,7 @@ impl SelfCollisionModel {
             model.link_poses_into(Pose::IDENTITY, q, poses);
             out.clear();
             for &(a, b) in &candidate_links {
-                out.push(links_collide(&model, poses, a, b));
+                out.push(links_collide(&shapes, &by_link, poses, a, b));
             }
         };
         let mut hits = Vec::new();
@@ -224,7 +304,7 @@ impl SelfCollisionModel {
                     (0..=SWEEP_STEPS).all(|k| {
                         q[*d] = lo + (hi - lo) * k as f32 / SWEEP_STEPS as f32;
                         model.link_poses_into(Pose::IDENTITY, &q, &mut poses);
-                        !links_collide(&model, &poses, a, b)
+                        !links_collide(&shapes, &by_link, &poses, a, b)
                     })
                 }
                 _ => false,
@@ -234,13 +314,44 @@ impl SelfCollisionModel {
             }
         }
         let mut pairs = Vec::new();
-        for i in 0..shapes.len() {
-            for j in i + 1..shapes.len() {
-                if status[key(shapes[i].link, shapes[j].link)].is_none() {
-                    pairs.push((i as u16, j as u16));
+        let mut groups = Vec::new();
+        for a in 0..nl {
+            for b in a + 1..nl {
+                if by_link[a].is_empty() || by_link[b].is_empty() || status[key(a, b)].is_some() {
+                    continue;
                 }
+                let start = pairs.len() as u32;
+                for &i in &by_link[a] {
+                    pairs.extend(by_link[b].iter().map(|&j| (i as u16, j as u16)));
+                }
+                groups.push(PairGroup {
+                    a: a as u16,
+                    b: b as u16,
+                    start,
+                    end: pairs.len() as u32,
+                });
             }
         }
+        let link_spheres = by_link
+            .iter()
+            .map(|ids| {
+                if ids.is_empty() {
+                    return (Vector::ZERO, -1.0);
+                }
+                let centre = ids
+                    .iter()
+                    .map(|&i| shapes[i].local_pose.translation)
+                    .fold(Vector::ZERO, |sum, c| sum + c)
+                    / ids.len() as f32;
+                let radius = ids
+                    .iter()
+                    .map(|&i| {
+                        (shapes[i].local_pose.translation - centre).length() + shapes[i].radius
+                    })
+                    .fold(0.0f32, f32::max);
+                (centre, radius)
+            })
+            .collect();
         let mut allowed = Vec::new();
         for a in 0..nl {
             for b in a + 1..nl {
@@ -258,6 +369,8 @@ impl SelfCollisionModel {
             all_shapes: (0..shapes.len() as u16).collect(),
             shapes,
             pairs,
+            groups,
+            link_spheres,
             allowed,
         }
     }
@@ -287,12 +400,22 @@ impl SelfCollisionModel {
     }
 }
 
-fn links_collide(model: &AgentModel, poses: &[Pose], a: usize, b: usize) -> bool {
-    for ca in &model.links()[a].collisions {
+/// Whether links `a` and `b` (their shapes, `by_link` indices into `shapes`) collide with the
+/// links at `poses`.
+fn links_collide(
+    shapes: &[ShapeEntry],
+    by_link: &[Vec<usize>],
+    poses: &[Pose],
+    a: usize,
+    b: usize,
+) -> bool {
+    for ca in by_link[a].iter().map(|&i| &shapes[i]) {
         let pa = poses[a] * ca.local_pose;
-        for cb in &model.links()[b].collisions {
+        for cb in by_link[b].iter().map(|&i| &shapes[i]) {
             let pb = poses[b] * cb.local_pose;
-            if (pa.translation - pb.translation).length() <= ca.bounding_radius + cb.bounding_radius
+            // The exact test alone (no bounding boxes), as the pairs to leave out were always
+            // found: which pairs a model checks does not change with how fast checks are.
+            if (pa.translation - pb.translation).length() <= ca.radius + cb.radius
                 && intersects(&pa, &*ca.shape.0, &pb, &*cb.shape.0)
             {
                 return true;
@@ -300,4 +423,55 @@ fn links_collide(model: &AgentModel, poses: &[Pose], a: usize, b: usize) -> bool
         }
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parry3d::bounding_volume::BoundingVolume;
+
+    /// A 10 x 6 x 4 cm box as a convex polyhedron (a mesh's hull), turned by `yaw` about z.
+    fn hull_entry(yaw: f32) -> (ShapeEntry, Pose) {
+        let mut corners = Vec::new();
+        for x in [-0.05, 0.05] {
+            for y in [-0.03, 0.03] {
+                for z in [-0.02, 0.02] {
+                    corners.push(Vector::new(x, y, z));
+                }
+            }
+        }
+        let shape = SharedShape::convex_hull(&corners).expect("hull");
+        let entry = ShapeEntry::new(0, Pose::IDENTITY, shape, 0.07);
+        (
+            entry,
+            Pose::from_rotation(parry3d::math::Rotation::from_rotation_z(yaw)),
+        )
+    }
+
+    #[test]
+    fn a_polyhedron_is_tested_through_its_bounding_box_with_the_exact_answer() {
+        let wall = Cuboid::new(Vector::new(0.01, 0.5, 0.5));
+        for yaw in [0.0f32, 0.3, 1.0] {
+            let (entry, pose) = hull_entry(yaw);
+            assert!(entry.bounds.is_some());
+            // The hull's extent along x when turned by `yaw`.
+            let reach = 0.05 * yaw.cos() + 0.03 * yaw.sin();
+            for (gap, hit) in [(0.003, false), (-0.001, true), (0.0005, false)] {
+                let at = Pose::from_translation(Vector::X * (reach + 0.01 + gap));
+                assert_eq!(entry.hits(&pose, &wall, &at), hit, "yaw {yaw}, gap {gap}");
+                // Against another polyhedron the same (its box, then its shape).
+                let (other, _) = hull_entry(0.0);
+                let at = Pose::from_translation(Vector::X * (reach + 0.05 + gap));
+                assert_eq!(
+                    entry.hits_shape(&pose, &other, &at),
+                    hit,
+                    "yaw {yaw}, gap {gap}"
+                );
+            }
+            // The AABB from the box holds the exact one.
+            let exact = entry.shape.compute_aabb(&pose);
+            let boxed = entry.aabb(&pose);
+            assert!(boxed.contains(&exact), "{boxed:?} {exact:?}");
+        }
+    }
 }

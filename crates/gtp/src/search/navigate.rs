@@ -4,9 +4,10 @@
 //! robot stands spares path searches that cannot succeed.
 
 use std::collections::HashSet;
+use std::sync::Arc;
 use std::time::Instant;
 
-use geometry::collision::CollisionChecker;
+use geometry::collision::{CollisionChecker, StaticObstacles};
 use geometry::effort;
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Rotation, Vector};
@@ -171,6 +172,19 @@ impl Search {
                 format!("the object the robot carries: {e}"),
             )
         })?;
+        // Every base pose is checked with the joints where they are now (`q0_full`), and moving
+        // the base alone keeps the links' relative poses: the robot's self-collision is the same
+        // at every base pose. Free here, it is left out of the base checks (a robot of many
+        // mesh pieces spends most of a check on its own folded arms); what the robot and what it
+        // carries hit in the scene, and what it carries against its links, are still checked.
+        let alone = CollisionChecker::new(
+            self.setup.self_model.clone(),
+            Arc::new(StaticObstacles::empty()),
+            self.world.agent_state(robot).base,
+        );
+        if alone.is_config_free(&self.q0_full) {
+            checker.set_self_collision(false);
+        }
         Ok(checker)
     }
 
