@@ -67,7 +67,7 @@ pub struct Grasp {
     /// Pose of the tool frame in the object's frame.
     pub tool_in_object: Pose,
     /// The jaw opening when closed on the object: the contacts' distance, or wider where the
-    /// fingers meet the object before the contacts (see [`closed_width`]).
+    /// fingers meet the object before the contacts (a flat pad across a tilted axis).
     pub width: f32,
     /// Jaw opening while approaching (width plus clearance, at most the maximum opening).
     pub opening: f32,
