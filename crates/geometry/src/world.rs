@@ -230,7 +230,7 @@ impl World {
                 &spec.frames,
                 spec.mount_height,
             )
-            .map_err(|e| scene.error(&format!("{at}.frames"), e))?;
+            .map_err(|e| scene.error(&format!("{at}.{}", e.key), e.message))?;
             let model =
                 AgentModel::from_urdf_str_with(&text, &spec.urdf.display().to_string(), &meshes)
                     .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;

@@ -26,11 +26,30 @@ pub struct ExtraFrame {
 /// The name of the root link added under a mounted robot.
 pub const MOUNT_LINK: &str = "floor_mount";
 
+/// What is wrong with a scene's frames or mount: the scene key (`frames`, `base.z`) and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameError {
+    pub key: &'static str,
+    pub message: String,
+}
+
 /// `text` (a URDF) with `frames` added, and with its root link `mount_height` metres above a
 /// new root [`MOUNT_LINK`] when the height is not 0. Errors say what is wrong with a frame (a
-/// name already used, a parent that is not a link). A document urdf-rs cannot read is returned
-/// unchanged, for the model's loader to report where it is wrong.
-pub fn add_frames(text: &str, frames: &[ExtraFrame], mount_height: f32) -> Result<String, String> {
+/// name already used, a parent that is not a link) or the mount. A document urdf-rs cannot read
+/// is returned unchanged, for the model's loader to report where it is wrong.
+pub fn add_frames(
+    text: &str,
+    frames: &[ExtraFrame],
+    mount_height: f32,
+) -> Result<String, FrameError> {
+    let frame_error = |message: String| FrameError {
+        key: "frames",
+        message,
+    };
+    let mount_error = |message: String| FrameError {
+        key: "base.z",
+        message,
+    };
     if frames.is_empty() && mount_height == 0.0 {
         return Ok(text.to_string());
     }
@@ -45,18 +64,18 @@ pub fn add_frames(text: &str, frames: &[ExtraFrame], mount_height: f32) -> Resul
     let mut added = String::from("\n  <!-- added by the htngtp scene -->\n");
     for f in frames {
         let joint = format!("{}_joint", f.name);
-        check_name(&f.name)?;
+        check_name(&f.name).map_err(frame_error)?;
         if links.contains(&f.name) || joints.contains(&joint) {
-            return Err(format!(
+            return Err(frame_error(format!(
                 "frame `{}`: the URDF already has a link `{}` or a joint `{joint}`",
                 f.name, f.name
-            ));
+            )));
         }
         if !links.contains(&f.parent) {
-            return Err(format!(
+            return Err(frame_error(format!(
                 "frame `{}`: no link `{}` to hang it from",
                 f.name, f.parent
-            ));
+            )));
         }
         added.push_str(&format!("  <link name=\"{}\"/>\n", f.name));
         added.push_str(&fixed_joint(&joint, &f.parent, &f.name, f.xyz, f.rpy));
@@ -72,16 +91,16 @@ pub fn add_frames(text: &str, frames: &[ExtraFrame], mount_height: f32) -> Resul
             .filter(|l| !children.contains(l))
             .collect();
         let [root] = roots[..] else {
-            return Err(format!(
-                "base.z: the URDF has {} root links, so there is no one link to mount",
+            return Err(mount_error(format!(
+                "the URDF has {} root links, so there is no one link to mount",
                 roots.len()
-            ));
+            )));
         };
         let joint = format!("{MOUNT_LINK}_joint");
         if links.contains(MOUNT_LINK) || joints.contains(&joint) {
-            return Err(format!(
-                "base.z: the URDF already has a link `{MOUNT_LINK}` or a joint `{joint}`"
-            ));
+            return Err(mount_error(format!(
+                "the URDF already has a link `{MOUNT_LINK}` or a joint `{joint}`"
+            )));
         }
         added.push_str(&format!("  <link name=\"{MOUNT_LINK}\"/>\n"));
         added.push_str(&fixed_joint(
@@ -163,14 +182,16 @@ mod tests {
         let mut f = tcp();
         f.parent = "wrist".into();
         let e = add_frames(ARM, &[f], 0.0).unwrap_err();
-        assert!(e.contains("no link `wrist`"), "{e}");
+        assert_eq!(e.key, "frames");
+        assert!(e.message.contains("no link `wrist`"), "{e:?}");
         let mut f = tcp();
         f.name = "hand".into();
         let e = add_frames(ARM, &[f], 0.0).unwrap_err();
-        assert!(e.contains("already has a link `hand`"), "{e}");
+        assert!(e.message.contains("already has a link `hand`"), "{e:?}");
         let mut f = tcp();
         f.name = "a\"b".into();
-        assert!(add_frames(ARM, &[f], 0.0).unwrap_err().contains("letters"));
+        let e = add_frames(ARM, &[f], 0.0).unwrap_err();
+        assert!(e.message.contains("letters"), "{e:?}");
     }
 
     #[test]
