@@ -200,6 +200,15 @@ fn a_sample_of_mutated_inputs_through_the_binary_exits_cleanly() {
                     .stderr(Stdio::piped())
                     .spawn()
                     .unwrap();
+                // Drained while the child runs: an error quoting a long mutated input can be
+                // bigger than the pipe's buffer, and a child blocked writing it never exits.
+                let mut stderr = child.stderr.take().expect("piped stderr");
+                let drain = std::thread::spawn(move || {
+                    use std::io::Read;
+                    let mut err = String::new();
+                    let _ = stderr.read_to_string(&mut err);
+                    err
+                });
                 // A liveness bound, far above the 2 s limits given: a hung child is killed.
                 let status = loop {
                     if let Some(s) = child.try_wait().unwrap() {
@@ -212,11 +221,7 @@ fn a_sample_of_mutated_inputs_through_the_binary_exits_cleanly() {
                     }
                     std::thread::sleep(Duration::from_millis(10));
                 };
-                let mut err = String::new();
-                if let Some(mut e) = child.stderr.take() {
-                    use std::io::Read;
-                    let _ = e.read_to_string(&mut err);
-                }
+                let err = drain.join().unwrap_or_default();
                 runs += 1;
                 let wall = began.elapsed().as_secs_f64();
                 // A run with a time limit stops within 10 % (at least 0.2 s) of it.

@@ -714,3 +714,26 @@ fn limits_stop_reading_and_parsing_with_exit_2() {
     let rows = std::fs::read_to_string(&csv).unwrap();
     assert!(rows.contains("\ntiny,p01.hddl,limit-reached,"), "{rows}");
 }
+
+/// A scene with a 300 KB unknown key: `facts`, `gtp` and `render` say so in one short line, exit 3
+/// (the whole key in the message once made a 512 KB error line).
+#[test]
+fn a_scene_error_quoting_a_huge_key_is_one_short_line() {
+    let dir = scratch("huge-key");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, format!("[scene]\n{} = 1\n", "a".repeat(300_000))).unwrap();
+    let s = scene.to_str().unwrap();
+    let out = dir.join("x.png");
+    for args in [
+        vec!["facts", s],
+        vec!["gtp", s, "pick", "book"],
+        vec!["render", s, "--out", out.to_str().unwrap()],
+    ] {
+        let o = Command::new(EXE).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {err:.300}");
+        assert!(err.len() < 3000, "{args:?}: {} bytes", err.len());
+        assert!(err.contains("unknown field"), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    }
+}

@@ -84,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let world = match crate::cmd::geo::load_world(&args.scene, args.allow_initial_contact) {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", htn::text::clip(&e.to_string()));
             return Ok(exit::BAD_INPUT);
         }
     };
@@ -104,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut stream = match planner.run(&world, &args.task, &names, &options) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", htn::text::clip(&e.to_string()));
             return Ok(exit::BAD_INPUT);
         }
     };

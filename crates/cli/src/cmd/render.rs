@@ -50,7 +50,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let world = match crate::cmd::geo::load_world(&args.scene, args.allow_initial_contact) {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", htn::text::clip(&e.to_string()));
             return Ok(crate::exit::BAD_INPUT);
         }
     };
