@@ -1,5 +1,6 @@
 // Test harness: a static file server on 127.0.0.1 for the built viewer, and a headless Debian
 // Chromium driven by playwright-core with software WebGL (SwiftShader). No network is used.
+import { spawn } from 'node:child_process';
 import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, rmSync, existsSync, statSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -78,4 +79,25 @@ export async function open(context, url) {
     .catch((e) => { throw new Error(`${e.message}\npage log:\n${logs.join('\n')}`); });
   page.logs = logs;
   return page;
+}
+
+/** Starts `BIN view PLAN` on a free port; resolves to { url, child } once it prints its URL. */
+export function view(bin, plan) {
+  const child = spawn(bin, ['view', plan, '--port', '0', '--dist', DIST], { stdio: ['ignore', 'pipe', 'pipe'] });
+  return new Promise((ok, fail) => {
+    let out = '';
+    const timer = setTimeout(() => {
+      child.kill();
+      fail(new Error(`no URL printed within 10 s: ${out}`));
+    }, 10_000);
+    child.stdout.on('data', (d) => {
+      out += d;
+      const m = /http:\/\/127\.0\.0\.1:\d+\//.exec(out);
+      if (m) {
+        clearTimeout(timer);
+        ok({ url: m[0], child });
+      }
+    });
+    child.on('exit', (code) => fail(new Error(`htngtp view exited with ${code}: ${out}`)));
+  });
 }

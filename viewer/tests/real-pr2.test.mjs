@@ -4,11 +4,11 @@
 // (HTNGTP_BIN, set by test.sh). HTNGTP_PR2_PLAN names a plan JSON to use instead of planning one.
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn, spawnSync } from 'node:child_process';
+import { spawnSync } from 'node:child_process';
 import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
-import { DIST, VIEWER, launch, open } from './harness.mjs';
+import { VIEWER, launch, open, view } from './harness.mjs';
 
 const REPO = resolve(VIEWER, '..');
 const ROBOTS = resolve(REPO, '..', 'shared', 'robots');
@@ -18,24 +18,6 @@ const skip = !existsSync(join(ROBOTS, 'pr2_description'))
   : !BIN
     ? 'set HTNGTP_BIN to a built htngtp binary to run these'
     : false;
-
-/** Starts `htngtp view PLAN` on a free port; resolves to { url, child }. */
-function view(plan) {
-  const child = spawn(BIN, ['view', plan, '--port', '0', '--dist', DIST], { stdio: ['ignore', 'pipe', 'pipe'] });
-  return new Promise((ok, fail) => {
-    let out = '';
-    const timer = setTimeout(() => fail(new Error(`no URL printed within 10 s: ${out}`)), 10_000);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const m = /http:\/\/127\.0\.0\.1:\d+\//.exec(out);
-      if (m) {
-        clearTimeout(timer);
-        ok({ url: m[0], child });
-      }
-    });
-    child.on('exit', (code) => fail(new Error(`htngtp view exited with ${code}: ${out}`)));
-  });
-}
 
 describe('the real PR2', { skip }, () => {
   let dir;
@@ -57,7 +39,7 @@ describe('the real PR2', { skip }, () => {
     }
     plan = JSON.parse(readFileSync(planFile, 'utf8'));
     browser = await launch();
-    server = await view(planFile);
+    server = await view(BIN, planFile);
   });
   after(async () => {
     server?.child.kill();

@@ -3,10 +3,10 @@
 // the output of `htngtp demo --json`). Run with ./test.sh (builds first).
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn, spawnSync } from 'node:child_process';
+import { spawnSync } from 'node:child_process';
 import { mkdirSync, readFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
-import { DIST, VIEWER, launch, open, serve } from './harness.mjs';
+import { VIEWER, launch, open, serve, view } from './harness.mjs';
 
 const PLAN_FILE = process.env.HTNGTP_PLAN ?? join(VIEWER, 'fixtures', 'sample-plan.json');
 const PLAN_TEXT = readFileSync(PLAN_FILE, 'utf8');
@@ -421,21 +421,8 @@ describe('bad input shows the error panel', () => {
 const BIN = process.env.HTNGTP_BIN;
 describe('htngtp view', { skip: BIN ? false : 'set HTNGTP_BIN to a built htngtp binary to run these' }, () => {
   test('serves the page and the plan on 127.0.0.1 and prints the URL', async () => {
-    const child = spawn(BIN, ['view', PLAN_FILE, '--port', '0', '--dist', DIST], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const { url, child } = await view(BIN, PLAN_FILE);
     try {
-      const url = await new Promise((ok, fail) => {
-        let out = '';
-        const timer = setTimeout(() => fail(new Error(`no URL printed within 10 s: ${out}`)), 10_000);
-        child.stdout.on('data', (d) => {
-          out += d;
-          const m = /http:\/\/127\.0\.0\.1:\d+\//.exec(out);
-          if (m) {
-            clearTimeout(timer);
-            ok(m[0]);
-          }
-        });
-        child.on('exit', (code) => fail(new Error(`htngtp view exited with ${code}: ${out}`)));
-      });
       const page = await open(browser.context, url);
       try {
         const h = await hook(page, () => ({ ready: __htngtp.ready, error: __htngtp.error, objects: __htngtp.objectCount, steps: __htngtp.stepCount }));
