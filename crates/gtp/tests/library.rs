@@ -717,3 +717,46 @@ fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
     assert!(f.message.contains("can be picked up"), "{f}");
     assert_eq!(stream.stats().points, 1);
 }
+
+/// The library's shelf with a tall book standing in its middle compartment, 5 cm under the
+/// board above, and the robot in front of the shelf.
+fn shelf() -> World {
+    World::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../domains/library/scene-shelf.toml"
+    ))
+    .expect("shelf scene")
+}
+
+/// A book under a board cannot be lifted straight up: it is raised a centimetre, pulled out
+/// back along the gripper's approach, then lifted; put back into the shelf, it is pushed in the
+/// same way, reversed.
+#[test]
+fn a_book_under_a_board_is_pulled_out_and_pushed_back_in() {
+    let world = shelf();
+    let planner = Planner::new();
+    let book = world.object_id("tall-book").unwrap();
+    let shelf_id = world.object_id("shelf").unwrap();
+    let picked = first(&planner, &world, "pick", &["tall-book"]);
+    recheck(&planner, &world, &picked);
+    let lifts: Vec<_> = picked
+        .summary
+        .trajectories
+        .iter()
+        .filter(|t| t.phase == Phase::Lift)
+        .collect();
+    assert_eq!(lifts.len(), 3, "raise, pull out, lift");
+    let start = world.object_pose(book).translation;
+    let end = picked.world.object_pose(book).translation;
+    assert!(end.z - start.z > 0.15, "lifted {} m", end.z - start.z);
+    // Out of the shelf: the compartment opens towards -y, its front at y = 0.64.
+    assert!(end.y < 0.64 - 0.1, "pulled out to y = {}", end.y);
+    let placed = first(&planner, &picked.world, "place-on", &["tall-book", "shelf"]);
+    recheck(&planner, &picked.world, &placed);
+    // In the upper compartment (board at 0.84 m, the next at 1.18 m): the 30 cm book's top 4 cm
+    // under the board, so it went in sideways, not down from 15 cm above.
+    let at = placed.world.object_pose(book).translation;
+    assert!((at.z - 0.99).abs() < 0.01, "placed at {at:?}");
+    assert!(on(&placed.world, book, shelf_id, 0.05));
+    rests_free(&placed.world, book);
+}

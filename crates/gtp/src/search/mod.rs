@@ -15,6 +15,7 @@
 //! | `perception.rs` | what the human reaches and may see at an effort level (the points' tests) |
 //! | `grasps.rs` | the grasp choices (arm x grasp, or the grasp held) and their cheap tests |
 //! | `pick.rs` | picking a grasp up: gripper boxes, inverse kinematics, approach, lift |
+//! | `pull_out.rs` | the lift's way out from under a board: raise, slide back, lift (and reversed) |
 //! | `placements.rs` | the object's orientations at a point and the world after a placement |
 //! | `verdicts.rs` | the human-related constraints of a placement: reach, pixel visibility |
 //! | `tuple.rs` | a whole tuple confirmed: placement IK, straight moves, planned motions |
@@ -34,6 +35,7 @@ mod perception;
 mod pick;
 mod placements;
 mod points;
+mod pull_out;
 mod take;
 mod tuple;
 mod verdicts;

@@ -13,6 +13,7 @@ use crate::solution::{Phase, Trajectory};
 
 use super::grasps::gripper_hits;
 use super::motions::{GraspMotions, Grip, end, straddles};
+use super::pull_out::Pull;
 use super::{STRAIGHT_STEPS, Search, Stage};
 
 /// Lift height during which the object may still touch what it rested on.
@@ -91,7 +92,7 @@ impl Search {
         let open = m.open(self.obstacles.workspace_but_object.clone());
         let qg = self.grasp_configuration(&m, &open, tool, &mut rng)?;
         let (grasp_path, q_pre) = self.straight_approach(&m, &open, &qg, back, &mut rng)?;
-        let (lift, q_lift) = self.lift(&m, &qg, &mut rng)?;
+        let (lift, q_lift) = self.lift(&m, &qg, tool, &mut rng)?;
         Some(PickPlan {
             approach: None,
             q_pre,
@@ -194,72 +195,99 @@ impl Search {
         Some((grasp_path, q_pre))
     }
 
-    /// The lift from the grasp configuration `qg`: first clear of what the object rests on
-    /// (those obstacles unchecked), then the rest with full checks. The two paths with the
+    /// The lift from the grasp configuration `qg` (the tool at `tool`): straight up, first
+    /// clear of what the object rests on (those obstacles unchecked), then the rest with full
+    /// checks; when that is blocked (a board above), a [`Pull`] out first. The paths with the
     /// obstacles each leaves unchecked, and the arm's values at the top.
     #[allow(clippy::type_complexity)]
     fn lift(
         &mut self,
         m: &GraspMotions,
         qg: &[f32],
+        tool: Pose,
         rng: &mut fastrand::Rng,
     ) -> Option<(Vec<(JointPath, Vec<String>)>, Vec<f32>)> {
-        let oname = self.object_name();
+        let unstick = UNSTICK.min(self.c.lift);
+        let up = [Vector::Z * unstick, Vector::Z * (self.c.lift - unstick)];
+        let straight_up = self.lift_moves(m, qg, &up, &[1, STRAIGHT_STEPS], rng);
+        let blocked = match straight_up {
+            Ok(lift) => return Some(lift),
+            Err(e) => e,
+        };
+        let pulled = self.pull_for_pick(tool).map(|pull| {
+            let steps = [1, pull.slide_steps(), STRAIGHT_STEPS];
+            self.lift_moves(m, qg, &pull.moves(self.c.lift), &steps, rng)
+        });
+        match pulled {
+            Some(Ok(lift)) => Some(lift),
+            Some(Err(e)) => {
+                let oname = self.object_name();
+                self.reject(Stage::Pick, || {
+                    format!("no collision-free lift of `{oname}`: {blocked}; pulled out: {e}")
+                });
+                None
+            }
+            None => {
+                let oname = self.object_name();
+                self.reject(Stage::Pick, || {
+                    format!("no collision-free lift of `{oname}`: {blocked}")
+                });
+                None
+            }
+        }
+    }
+
+    /// The pull out of the task's object, grasped with the tool at `tool`, where it rests.
+    fn pull_for_pick(&self, tool: Pose) -> Option<Pull> {
+        let o = self.object?;
+        let shape = self.world.object(o).shape.clone();
+        let pose = self.world.object_shape_pose(o);
+        let obstacles = &self.obstacles.workspace_but_object;
+        Pull::find(&*shape, &pose, &tool, self.c.lift, obstacles)
+    }
+
+    /// Straight moves of the tool from `qg` holding the object, each in its number of `steps`:
+    /// the first with what the object rests on unchecked, the others with full checks.
+    #[allow(clippy::type_complexity)]
+    fn lift_moves(
+        &self,
+        m: &GraspMotions,
+        qg: &[f32],
+        moves: &[Vector],
+        steps: &[usize],
+        rng: &mut fastrand::Rng,
+    ) -> Result<(Vec<(JointPath, Vec<String>)>, Vec<f32>), String> {
         let rrt = self.cfg.rrt.clone();
         let mut checks = 0;
         let never = |_: &[f32]| true;
-        let unstick = UNSTICK.min(self.c.lift);
         let closed = m.closed(self.obstacles.workspace_but_object.clone());
         let resting: Vec<&str> = self.resting_on.iter().map(String::as_str).collect();
         let held_free_of_rest = m.holding(Arc::new(
             self.obstacles.workspace_but_object.without(&resting),
         ));
         let hold_check = |qa: &[f32]| held_free_of_rest.free(qa);
-        let lift1 = self.or_reject(
-            closed.straight(
-                qg,
-                Vector::Z * unstick,
-                1,
-                &rrt,
-                &hold_check,
-                rng,
-                &mut checks,
-            ),
-            Stage::Pick,
-            || format!("no collision-free lift of `{oname}`"),
-        )?;
-        let q1 = end(&lift1)?;
         let held = m.holding(self.obstacles.workspace_but_object.clone());
-        let rest = self.c.lift - unstick;
-        let lift2 = if rest > 1e-4 {
-            held.straight(
-                &q1,
-                Vector::Z * rest,
-                STRAIGHT_STEPS,
-                &rrt,
-                &never,
-                rng,
-                &mut checks,
-            )
-        } else {
-            Ok(JointPath {
-                waypoints: vec![q1.clone()],
-            })
-        };
-        let lift2 = match lift2 {
-            Ok(p) => p,
-            Err(e) => {
-                self.reject(Stage::Pick, || {
-                    format!("no collision-free lift of `{oname}`: {e}")
-                });
-                return None;
-            }
-        };
-        let q_lift = end(&lift2)?;
-        Some((
-            vec![(lift1, self.resting_on.clone()), (lift2, Vec::new())],
-            q_lift,
-        ))
+        let mut out = Vec::new();
+        let mut q = qg.to_vec();
+        for (k, (&offset, &n)) in moves.iter().zip(steps).enumerate() {
+            let path = if offset.length() <= 1e-4 {
+                JointPath {
+                    waypoints: vec![q.clone()],
+                }
+            } else if k == 0 {
+                closed.straight(&q, offset, n, &rrt, &hold_check, rng, &mut checks)?
+            } else {
+                held.straight(&q, offset, n, &rrt, &never, rng, &mut checks)?
+            };
+            q = path.waypoints.last().cloned().ok_or("an empty path")?;
+            let ignored = if k == 0 {
+                self.resting_on.clone()
+            } else {
+                Vec::new()
+            };
+            out.push((path, ignored));
+        }
+        Ok((out, q))
     }
 
     /// Plans the approach of grasp choice `grasp`'s pick (RRT-Connect from the arm's start to

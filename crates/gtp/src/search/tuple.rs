@@ -15,6 +15,7 @@ use crate::task::TaskKind;
 use super::cursor::{PlacementKey, Tuple};
 use super::grasps::gripper_hits;
 use super::motions::{GraspMotions, Grip, end, straddles};
+use super::pull_out::Pull;
 use super::verdicts::Verdict;
 use super::{STRAIGHT_STEPS, Search, Stage};
 
@@ -59,7 +60,8 @@ impl Search {
         }
         let ch = self.choices[t.grasp];
         let tool = t.orientation.pose * ch.tool_in_object;
-        if !self.gripper_fits_placement(ch.arm, ch.grasp.width, ch.grasp.opening, tool) {
+        let grip = (ch.grasp.width, ch.grasp.opening);
+        if !self.gripper_fits_placement(ch.arm, grip, tool, t.orientation.pose) {
             return None;
         }
         // For a placement, the world after the task does not depend on the grasp (the arm
@@ -150,11 +152,18 @@ impl Search {
         Some(self.solution(after, grasp, None, None, level, trajectories))
     }
 
-    /// Cheap box tests of the gripper (closed to `width`, or open by `opening`) with the tool
-    /// at `tool`: around the object at the placement, and for a placing task where the descent
-    /// starts, holding the object, and where the retreat ends, open (the straight moves would
-    /// fail there, after an inverse kinematics each).
-    fn gripper_fits_placement(&mut self, arm: usize, width: f32, opening: f32, tool: Pose) -> bool {
+    /// Cheap box tests of the gripper (closed to `width`, or open by `opening`: `grip`) with
+    /// the tool at `tool`, the object at `pose`: around the object at the placement, and for a
+    /// placing task where the descent starts (above the placement, or in front of it for a
+    /// [`Pull`] in), holding the object, and where the retreat ends, open (the straight moves
+    /// would fail there, after an inverse kinematics each).
+    fn gripper_fits_placement(
+        &mut self,
+        arm: usize,
+        (width, opening): (f32, f32),
+        tool: Pose,
+        pose: Pose,
+    ) -> bool {
         let oname = self.object_name();
         let setup = self.setup.clone();
         let gripper = &setup.arms[arm].gripper;
@@ -170,10 +179,16 @@ impl Search {
         }
         let above = Pose::from_parts(tool.translation + Vector::Z * self.c.lift, tool.rotation);
         if let Some(n) = gripper_hits(gripper, &above, width, &obstacles) {
-            self.reject(Stage::Gripper, || {
-                format!("the gripper holding `{oname}` hits `{n}` above every placement")
+            let in_front = self.pull_for_placement(tool, pose).map(|p| {
+                let [raise, slide, lift] = p.moves(self.c.lift);
+                Pose::from_parts(tool.translation + raise + slide + lift, tool.rotation)
             });
-            return false;
+            if in_front.is_none_or(|t| gripper_hits(gripper, &t, width, &obstacles).is_some()) {
+                self.reject(Stage::Gripper, || {
+                    format!("the gripper holding `{oname}` hits `{n}` above every placement")
+                });
+                return false;
+            }
         }
         let back = tool.rotation * Vector::X * (-self.c.approach);
         let away = Pose::from_parts(tool.translation + back, tool.rotation);
@@ -187,6 +202,16 @@ impl Search {
             return false;
         }
         true
+    }
+
+    /// The pull that puts the object at `pose` (the tool at `tool`) in under what is above it,
+    /// reversed; `None` when there is none (see [`Pull::find`]).
+    fn pull_for_placement(&self, tool: Pose, pose: Pose) -> Option<Pull> {
+        let o = self.object?;
+        let model = self.world.object(o);
+        let shape_pose = pose * model.shape_offset;
+        let obstacles = &self.obstacles.workspace_but_object;
+        Pull::find(&*model.shape, &shape_pose, &tool, self.c.lift, obstacles)
     }
 
     /// The arm's values with the tool at `tool`, holding the object (`held`), from where the
@@ -273,11 +298,27 @@ impl Search {
         let mut checks = 0;
         let never = |_: &[f32]| true;
         let up = Vector::Z * self.c.lift;
-        let mut down = self.or_reject(
-            held.straight(q_place, up, STRAIGHT_STEPS, &rrt, &never, rng, &mut checks),
-            Stage::Trajectory,
-            || format!("no collision-free descent to place `{oname}`"),
-        )?;
+        let straight_down =
+            held.straight(q_place, up, STRAIGHT_STEPS, &rrt, &never, rng, &mut checks);
+        let straight_down = straight_down.or_else(|blocked| -> Result<JointPath, String> {
+            let pull = self
+                .pull_for_placement(tool, pose)
+                .ok_or_else(|| blocked.clone())?;
+            let steps = [1, pull.slide_steps(), STRAIGHT_STEPS];
+            let mut q = q_place.to_vec();
+            let mut path = vec![q.clone()];
+            for (offset, n) in pull.moves(self.c.lift).into_iter().zip(steps) {
+                let part = held
+                    .straight(&q, offset, n, &rrt, &never, rng, &mut checks)
+                    .map_err(|e| format!("{blocked}; pushed in: {e}"))?;
+                path.extend(part.waypoints.into_iter().skip(1));
+                q = path.last().cloned().unwrap_or_default();
+            }
+            Ok(JointPath { waypoints: path })
+        });
+        let mut down = self.or_reject(straight_down, Stage::Trajectory, || {
+            format!("no collision-free descent to place `{oname}`")
+        })?;
         down.waypoints.reverse();
         let q_above = down.waypoints.first()?.clone();
         let open = m.open(self.obstacles.workspace_but_object.clone());
