@@ -8,7 +8,8 @@
 //!   (within [`crate::perception::HAND_TOLERANCE`] of its surface);
 //!   from level 1, when some shoulder of a stance of that level is within the agent's arm reach of
 //!   the object's surface (exact point-to-shape distance), confirmed by inverse kinematics of an
-//!   arm (the hand frame on the object's nearest surface point, joint limits respected).
+//!   arm (the hand frame on the object's nearest surface point, joint limits respected) unless
+//!   it is within [`SURE_REACH_MARGIN`] less than the reach.
 //! * `on(a, b)`: the centre of `a` lies over one of `b`'s support surfaces (or, for objects with
 //!   none, over `b`'s footprint) and `a`'s bottom is within `on_tolerance` above that surface.
 //! * `inside(a, b)`: the centre of `a` lies inside `b`'s oriented bounding box, and `a` is not
@@ -31,6 +32,12 @@ use crate::perception::{HAND_TOLERANCE, hand_positions, reach_postures};
 use crate::scene::{AgentId, AgentKind, ObjectId};
 use crate::visibility::{Aim, visibility_for_agent, visibility_from};
 use crate::world::World;
+
+/// Within this much less than the arm's reach of a shoulder an object is reachable without an
+/// inverse-kinematics confirmation (which only decides the band beyond): the convention of the
+/// plan checkers, `htngtp check` and the reference checker, which call an object this close to
+/// a shoulder reachable whatever the arm's joint limits say.
+pub const SURE_REACH_MARGIN: f32 = 0.2;
 
 /// Thresholds and resolutions of the fact computation.
 #[derive(Clone, Debug, PartialEq)]
@@ -161,11 +168,16 @@ pub fn reachable_effort(
         }
         for s in &list {
             for q in reach_postures(world, agent, s) {
-                let near = shoulders(world, agent, s.base, &q)
+                let nearest = shoulders(world, agent, s.base, &q)
                     .into_iter()
-                    .any(|p| distance_to_object(world, object, p) <= info.reach);
-                if near
-                    && (!params.confirm_with_ik || ik_confirms(world, agent, s.base, &q, object))
+                    .map(|p| distance_to_object(world, object, p))
+                    .fold(f32::INFINITY, f32::min);
+                let sure = nearest <= info.reach - SURE_REACH_MARGIN;
+                let near = nearest <= info.reach;
+                if sure
+                    || (near
+                        && (!params.confirm_with_ik
+                            || ik_confirms(world, agent, s.base, &q, object)))
                 {
                     return Some(level);
                 }

@@ -144,3 +144,30 @@ fn the_desk_in_front_of_the_member_is_shared_too() {
     assert!(r.is_some_and(|r| r <= 1), "pr2 Reach {r:?}");
     assert!(geometry::facts::on(&world, book, desk, 0.05));
 }
+
+/// Close behind the PR2 no arm gets there (the shoulder pans stop short of backwards), but an
+/// object within 0.2 m less than the arm's reach of a shoulder counts as reachable at level 1,
+/// as the plan checkers count it; a little farther back inverse kinematics decides, and it
+/// fails at level 1.
+#[test]
+fn close_behind_the_robot_is_within_reach_as_the_checkers_measure_it() {
+    let mut world = library();
+    let book = world.object_id("grey-book").unwrap();
+    let pr2 = world.agent_id("pr2").unwrap();
+    let base = world.agent_state(pr2).base;
+    let behind = |world: &mut World, d: f32| {
+        let mut pose = world.object_pose(book);
+        pose.translation = base * parry3d::math::Vector::new(-d, 0.0, 1.05);
+        world.set_object_pose(book, pose);
+    };
+    let params = FactParams {
+        max_effort: 1,
+        ..FactParams::default()
+    };
+    behind(&mut world, 0.6);
+    let r = geometry::facts::reachable_effort(&world, pr2, book, &params);
+    assert_eq!(r, Some(1), "0.6 m behind the base centre");
+    behind(&mut world, 0.95);
+    let r = geometry::facts::reachable_effort(&world, pr2, book, &params);
+    assert_eq!(r, None, "0.95 m behind the base centre");
+}
