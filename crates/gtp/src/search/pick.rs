@@ -306,7 +306,9 @@ impl Search {
         let open_all = m.open(self.obstacles.workspace.clone());
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
         self.stats.planner_calls += 1;
-        match open_all.plan(&m.q0, &q_pre, &self.cfg.rrt, &mut rng) {
+        let planned = open_all.plan(&m.q0, &q_pre, &self.rrt_params(), &mut rng);
+        self.note_rrt(&planned);
+        match planned {
             Ok((p, _)) => {
                 if let Some(Some(plan)) = self.pick_cache.get_mut(&grasp) {
                     plan.approach = Some(p);

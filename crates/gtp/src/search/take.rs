@@ -200,7 +200,9 @@ impl Search {
             match ik {
                 Ok(q_back) => {
                     self.stats.planner_calls += 1;
-                    match clear_all.plan(&m.q0, &q_back, &self.cfg.rrt, rng) {
+                    let planned = clear_all.plan(&m.q0, &q_back, &self.rrt_params(), rng);
+                    self.note_rrt(&planned);
+                    match planned {
                         Ok((p, _)) => return Ok(p),
                         Err(e) => last = e.to_string(),
                     }
