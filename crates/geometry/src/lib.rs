@@ -47,6 +47,7 @@ pub mod kinematics;
 pub mod mesh_file;
 pub mod mightability;
 pub mod perception;
+pub mod ray_capsule_cylinder;
 pub mod render;
 pub mod scene;
 pub mod visibility;

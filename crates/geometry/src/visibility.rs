@@ -23,6 +23,7 @@ use parry3d::query::{Ray, RayCast};
 use parry3d::shape::Shape;
 
 use crate::effort::aim_head;
+use crate::ray_capsule_cylinder;
 use crate::render::look_rotation;
 use crate::scene::{AgentId, ObjectId};
 use crate::world::{Body, BodyOwner, World};
@@ -151,7 +152,9 @@ pub fn visibility_from_upto(
             let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
             for i in 0..res {
                 let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
-                if obj.shape.intersects_ray(&tpose, &ray_at(a, b), f32::MAX) {
+                if ray_capsule_cylinder::cast_ray(&*obj.shape, &tpose, &ray_at(a, b), f32::MAX)
+                    .is_some()
+                {
                     ideal += 1;
                 }
             }
@@ -178,7 +181,8 @@ pub fn visibility_from_upto(
             let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
             let dir = rot * Vector::new(1.0, a, b);
             let ray = Ray::new(e, dir);
-            let Some(toi) = obj.shape.cast_ray(&tpose, &ray, f32::MAX, true) else {
+            let Some(toi) = ray_capsule_cylinder::cast_ray(&*obj.shape, &tpose, &ray, f32::MAX)
+            else {
                 continue;
             };
             vis.ideal += 1;
@@ -275,6 +279,18 @@ impl Occluder<'_> {
     fn blocks(&self, ray: &Ray, toi: f32) -> bool {
         if !self.aabb.intersects_local_ray(ray, toi) {
             return false;
+        }
+        let shape_pose = match &self.part {
+            Some(part) => self.pose * *part,
+            None => self.pose,
+        };
+        // Capsules and cylinders (people, cups, links) in closed form, not by GJK.
+        let local = ray.inverse_transform_by(&shape_pose);
+        if let Some(hit) = ray_capsule_cylinder::first_hit(self.shape, &local, toi) {
+            return match &self.part {
+                Some(_) => hit.is_some_and(|t| t < toi),
+                None => hit.is_some(),
+            };
         }
         match &self.part {
             Some(part) => {
