@@ -10,9 +10,14 @@ use parry3d::math::{Pose, Vector};
 use parry3d::query::Ray;
 use parry3d::shape::{Capsule, Cylinder, Shape};
 
+/// Whether rays meet `shape` in closed form here (a capsule or a cylinder).
+pub fn closed_form(shape: &dyn Shape) -> bool {
+    shape.as_capsule().is_some() || shape.as_cylinder().is_some()
+}
+
 /// The first hit of `ray` (in the shape's frame) with `shape` at a parameter in `[0, max]`:
 /// `Some(answer)` for a capsule or a cylinder, `None` for another shape (ask parry).
-pub fn first_hit(shape: &dyn Shape, ray: &Ray, max: f32) -> Option<Option<f32>> {
+fn first_hit(shape: &dyn Shape, ray: &Ray, max: f32) -> Option<Option<f32>> {
     if let Some(c) = shape.as_capsule() {
         return Some(capsule_first_hit(c, ray, max));
     }
@@ -25,13 +30,11 @@ pub fn first_hit(shape: &dyn Shape, ray: &Ray, max: f32) -> Option<Option<f32>> 
 /// The first hit of world `ray` with `shape` at `pose` within `max` (solid): in closed form
 /// for a capsule or a cylinder, by parry otherwise.
 pub fn cast_ray(shape: &dyn Shape, pose: &Pose, ray: &Ray, max: f32) -> Option<f32> {
-    if shape.as_capsule().is_some() || shape.as_cylinder().is_some() {
-        let local = ray.inverse_transform_by(pose);
-        if let Some(hit) = first_hit(shape, &local, max) {
-            return hit;
-        }
+    let local = ray.inverse_transform_by(pose);
+    match first_hit(shape, &local, max) {
+        Some(hit) => hit,
+        None => shape.cast_local_ray(&local, max, true),
     }
-    shape.cast_ray(pose, ray, max, true)
 }
 
 /// The first parameter in `[0, max]` where `ray` is within the capsule.

@@ -280,13 +280,10 @@ impl Occluder<'_> {
         if !self.aabb.intersects_local_ray(ray, toi) {
             return false;
         }
-        let shape_pose = match &self.part {
-            Some(part) => self.pose * *part,
-            None => self.pose,
-        };
-        // Capsules and cylinders (people, cups, links) in closed form, not by GJK.
-        let local = ray.inverse_transform_by(&shape_pose);
-        if let Some(hit) = ray_capsule_cylinder::first_hit(self.shape, &local, toi) {
+        if ray_capsule_cylinder::closed_form(self.shape) {
+            // Capsules and cylinders (people, cups, links) in closed form, not by GJK.
+            let pose = self.part.map_or(self.pose, |part| self.pose * part);
+            let hit = ray_capsule_cylinder::cast_ray(self.shape, &pose, ray, toi);
             return match &self.part {
                 Some(_) => hit.is_some_and(|t| t < toi),
                 None => hit.is_some(),

@@ -10,12 +10,14 @@ use gtp::planner::{CallOptions, GtpError, Planner, Solution, Stage};
 use gtp::solution::Phase;
 use gtp::verify::recheck_trajectories;
 
+/// A scene of `domains/library/`.
+fn scene(file: &str) -> World {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../domains/library/");
+    World::load(format!("{dir}{file}")).unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
 fn library() -> World {
-    World::load(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../domains/library/scene.toml"
-    ))
-    .expect("library scene")
+    scene("scene.toml")
 }
 
 fn first(planner: &Planner, world: &World, task: &str, args: &[&str]) -> Solution {
@@ -697,11 +699,7 @@ fn a_pick_with_both_grippers_full_says_so() {
 /// base stays where it is (`robot-effort` 1).
 #[test]
 fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
-    let world = World::load(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../domains/library/scene-far-pos.toml"
-    ))
-    .unwrap();
+    let world = scene("scene-far-pos.toml");
     let planner = Planner::new();
     let mut stream = planner
         .run(
@@ -721,11 +719,7 @@ fn when_no_grasp_can_be_picked_up_the_search_stops_and_says_so() {
 /// The library's shelf with a tall book standing in its middle compartment, 5 cm under the
 /// board above, and the robot in front of the shelf.
 fn shelf() -> World {
-    World::load(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../domains/library/scene-shelf.toml"
-    ))
-    .expect("shelf scene")
+    scene("scene-shelf.toml")
 }
 
 /// A book under a board cannot be lifted straight up: it is raised a centimetre, pulled out

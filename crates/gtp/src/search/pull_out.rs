@@ -107,14 +107,18 @@ mod tests {
         (b, Pose::from_translation(Vector::new(0.0, 0.12, 0.15)))
     }
 
+    /// The tool at the book's front edge, approaching from -y towards +y (its x along +y).
+    fn from_the_front() -> Pose {
+        Pose::from_parts(
+            Vector::new(0.0, 0.03, 0.25),
+            Rotation::from_rotation_z(FRAC_PI_2),
+        )
+    }
+
     #[test]
     fn a_book_under_a_board_is_pulled_out_until_its_way_up_is_free() {
         let (b, pose) = book();
-        // Approach from -y towards +y (tool x along +y), at the book's front edge.
-        let tool = Pose::from_parts(
-            Vector::new(0.0, 0.03, 0.25),
-            Rotation::from_rotation_z(FRAC_PI_2),
-        );
+        let tool = from_the_front();
         let pull = Pull::find(&b, &pose, &tool, 0.15, &board_above()).expect("a pull");
         assert!((pull.direction - Vector::new(0.0, -1.0, 0.0)).length() < 1e-5);
         // The board's front is at y = 0; the book's back at 0.22: a pull of 0.22 or a step more.
@@ -142,10 +146,7 @@ mod tests {
     #[test]
     fn no_pull_when_the_way_out_is_blocked_everywhere() {
         let (b, pose) = book();
-        let tool = Pose::from_parts(
-            Vector::new(0.0, 0.03, 0.25),
-            Rotation::from_rotation_z(FRAC_PI_2),
-        );
+        let tool = from_the_front();
         // A ceiling over the whole pull.
         let low = StaticObstacles::new(vec![Obstacle {
             name: "ceiling".into(),
