@@ -162,7 +162,13 @@ pub struct RrtParams {
     pub max_step: f32,
     /// The query fails after this many tree nodes (both trees together).
     pub max_nodes: usize,
-    /// The query fails after this long.
+    /// The query fails after this many configurations checked (the search's main cost): with
+    /// `max_nodes`, the budget that normally ends a query, the same on any machine however
+    /// loaded, so that a seed gives the same answer.
+    #[serde(default = "default_max_checks")]
+    pub max_checks: usize,
+    /// The query fails after this long: a safety net for robots whose checks are costly (a
+    /// mesh model), above what `max_checks` takes with the bundled models.
     pub time_limit: Duration,
     /// The query fails at this instant too (the caller's deadline; not serialised).
     #[serde(skip)]
@@ -175,13 +181,20 @@ pub struct RrtParams {
     pub certify_factor: u32,
 }
 
+/// 100,000 checks: about 0.3 s with the bundled PR2 model in a cluttered room, as many as
+/// 5,000 nodes of an arm's trees take there.
+fn default_max_checks() -> usize {
+    100_000
+}
+
 impl Default for RrtParams {
     fn default() -> Self {
         RrtParams {
             resolution: 0.1,
             max_step: 1.0,
             max_nodes: 5000,
-            time_limit: Duration::from_millis(500),
+            max_checks: default_max_checks(),
+            time_limit: Duration::from_secs(1),
             deadline: None,
             shortcut_iterations: 10,
             certify_factor: 16,
@@ -201,6 +214,9 @@ pub enum RrtError {
     /// The trees reached the node limit without connecting.
     #[error("no path within {0} nodes")]
     NodeLimit(usize),
+    /// The trees checked `max_checks` configurations without connecting.
+    #[error("no path within {0} collision checks")]
+    CheckLimit(usize),
     /// The time limit passed without the trees connecting.
     #[error("no path within {0:?}")]
     TimeLimit(Duration),
@@ -574,6 +590,9 @@ fn plan_once(
         if a.len() + b.len() >= params.max_nodes {
             return Err((RrtError::NodeLimit(params.max_nodes), stats));
         }
+        if stats.checks >= params.max_checks {
+            return Err((RrtError::CheckLimit(params.max_checks), stats));
+        }
         if began.elapsed() > params.time_limit
             || params.deadline.is_some_and(|d| Instant::now() >= d)
         {
@@ -875,6 +894,18 @@ mod tests {
         };
         let e = plan(&space, &[0.1, 0.1], &[0.9, 0.1], closed, &p, &mut rng).unwrap_err();
         assert_eq!(e.0, RrtError::NodeLimit(300));
+        // The check budget stops it too, with the checks it counted, on any machine.
+        let p = RrtParams {
+            max_checks: 2_000,
+            ..RrtParams::default()
+        };
+        let (e, stats) = plan(&space, &[0.1, 0.1], &[0.9, 0.1], closed, &p, &mut rng).unwrap_err();
+        assert_eq!(e, RrtError::CheckLimit(2_000));
+        assert!(
+            stats.checks >= 2_000 && stats.checks < 2_100,
+            "{}",
+            stats.checks
+        );
     }
 
     /// A continuous joint crossing +-pi: the planner goes the short way (0.2 rad); the recorded

@@ -82,7 +82,8 @@ impl BaseMoves {
             c,
             seed,
         )
-        .ok()?;
+        .ok()?
+        .share_rrt_failures(search);
         // Level 2 turns the base in place; level 4 steps too.
         stances.stance_radius = Some(radius);
         Some(BaseMoves {
@@ -146,7 +147,7 @@ impl BaseMoves {
             ) else {
                 continue;
             };
-            self.here = Some((drive, search));
+            self.here = Some((drive, search.share_rrt_failures(template)));
         }
     }
 
@@ -175,7 +176,8 @@ impl BaseMoves {
             c,
             self.seed,
         )
-        .map_err(|e| Failure::at(Stage::Search, e))?;
+        .map_err(|e| Failure::at(Stage::Search, e))?
+        .share_rrt_failures(template);
         let out = back.drive_to(goal);
         self.finished.planner_calls += back.stats.planner_calls;
         out

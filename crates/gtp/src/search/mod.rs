@@ -42,6 +42,7 @@ mod verdicts;
 
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use geometry::collision::StaticObstacles;
@@ -70,13 +71,13 @@ pub use verdicts::measure_visibility;
 const STRAIGHT_STEPS: usize = 3;
 
 /// After this many trajectory queries of one task call used up their budget without a path,
-/// the later ones get a [`LATER_RRT_DIVISOR`]th of its time and nodes: a query that fails
-/// costs its whole budget, and in a cluttered room the same blocked motion comes back at each
-/// candidate (the slowest call of 100 rooms spent 11 failed queries of 500 ms). Of the queries
-/// that find a path there, 99.8 % need fewer than 1,000 nodes.
+/// each later one gets half the budget of the one before, down to a [`LEAST_RRT_SHARE`]th: a
+/// query that fails costs its whole budget, and in a cluttered room the same blocked motion
+/// comes back at each candidate (the slowest call of 100 rooms spent 24 failed queries). Of
+/// the queries that find a path there, 99.8 % need fewer than 1,000 nodes.
 const FULL_RRT_FAILURES: usize = 2;
-/// See [`FULL_RRT_FAILURES`].
-const LATER_RRT_DIVISOR: u32 = 5;
+/// See [`FULL_RRT_FAILURES`]: the least share of the budget, 500 nodes and 10,000 checks.
+const LEAST_RRT_SHARE: usize = 10;
 
 /// The obstacle sets of a search, built once from the world at the start.
 ///
@@ -190,8 +191,9 @@ pub(crate) struct Search {
     /// Per grasp choice: transfers planned in vain since its last success (see
     /// [`failure::MAX_FAILED_TRANSFERS`]).
     failed_transfers: HashMap<usize, usize>,
-    /// Trajectory queries of this call that used up their budget without a path.
-    rrt_failures: usize,
+    /// Trajectory queries of this call that used up their budget without a path, counted
+    /// with the searches of its base moves (see [`Search::share_rrt_failures`]).
+    rrt_failures: Arc<AtomicUsize>,
     /// Per grasp choice: its pick, `None` when it cannot be picked up.
     pick_cache: HashMap<usize, Option<PickPlan>>,
     /// Per grasp choice: its motions' shared parts (built on first use).
@@ -273,7 +275,7 @@ impl Search {
             tried_points: HashSet::new(),
             failed_choices: HashSet::new(),
             failed_transfers: HashMap::new(),
-            rrt_failures: 0,
+            rrt_failures: Arc::default(),
             pick_cache: HashMap::new(),
             motions: HashMap::new(),
             verdicts: HashMap::new(),
@@ -291,17 +293,32 @@ impl Search {
     /// ones, or a smaller budget once [`FULL_RRT_FAILURES`] queries have failed.
     fn rrt_params(&self) -> RrtParams {
         let mut p = self.cfg.rrt.clone();
-        if self.rrt_failures >= FULL_RRT_FAILURES {
-            p.time_limit /= LATER_RRT_DIVISOR;
-            p.max_nodes = (p.max_nodes / LATER_RRT_DIVISOR as usize).max(2);
+        let failures = self.rrt_failures.load(Ordering::Relaxed);
+        let halvings = (failures + 1).saturating_sub(FULL_RRT_FAILURES);
+        if halvings > 0 {
+            let share = (1usize << halvings.min(8)).min(LEAST_RRT_SHARE);
+            p.time_limit /= share as u32;
+            p.max_nodes = (p.max_nodes / share).max(2);
+            p.max_checks = (p.max_checks / share).max(2);
         }
         p
     }
 
-    /// Counts a trajectory query that used up its budget (node or time limit).
+    /// Counts this search's failed trajectory queries with `call`'s: the searches from other
+    /// base poses are part of the same task call, and each would otherwise start again
+    /// with the full budget.
+    pub(crate) fn share_rrt_failures(mut self, call: &Search) -> Search {
+        self.rrt_failures = call.rrt_failures.clone();
+        self
+    }
+
+    /// Counts a trajectory query that used up its budget (node, check or time limit).
     fn note_rrt<T>(&mut self, r: &Result<T, RrtError>) {
-        if matches!(r, Err(RrtError::NodeLimit(_) | RrtError::TimeLimit(_))) {
-            self.rrt_failures += 1;
+        if matches!(
+            r,
+            Err(RrtError::NodeLimit(_) | RrtError::CheckLimit(_) | RrtError::TimeLimit(_))
+        ) {
+            self.rrt_failures.fetch_add(1, Ordering::Relaxed);
         }
     }
 
