@@ -131,6 +131,7 @@ fn bench_unconnectable(c: &mut Criterion) {
     for max_nodes in [1000, 5000] {
         let params = RrtParams {
             max_nodes,
+            max_checks: usize::MAX,
             time_limit: std::time::Duration::from_secs(60),
             ..RrtParams::default()
         };
