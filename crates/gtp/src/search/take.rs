@@ -4,7 +4,8 @@
 
 use std::sync::Arc;
 
-use geometry::scene::ObjectId;
+use geometry::collision::StaticObstacles;
+use geometry::scene::{AgentId, ObjectId};
 use geometry::world::World;
 use parry3d::math::{Pose, Vector};
 
@@ -49,26 +50,47 @@ impl Search {
         let m = self.grasp_motions(0)?;
         let ways = self.retreat_ways(&m, &world);
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
-        let (retreat, clear) = match self.take_retreat(&m, &world, o, &ways, &mut rng) {
-            Ok(r) => r,
-            Err(last) => {
-                self.reject(Stage::Trajectory, || {
-                    format!("no collision-free retreat after handing `{oname}` to {hname}: {last}")
-                });
-                return None;
+        // The robot draws back while the person's hand is on the object: first planned against
+        // the person as they stand, then, when that hits their reaching arm, against it.
+        let mut around = self.obstacles.workspace_but_object.clone();
+        let (retreat, clear, mut after, (motion, person, cleared)) = loop {
+            let (retreat, clear) = match self.take_retreat(&m, &world, o, &ways, &around, &mut rng)
+            {
+                Ok(r) => r,
+                Err(last) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!(
+                            "no collision-free retreat after handing `{oname}` to {hname}: {last}"
+                        )
+                    });
+                    return None;
+                }
+            };
+            // The world after: the gripper open where the retreat ends, the object in the hand.
+            let mut after = world.clone();
+            let robot_id = self.setup.agent;
+            let mut q = self.q0_full.clone();
+            robot::set_arm_values(m.arm(), &mut q, &end(&retreat)?);
+            robot::set_opening(&self.setup.model, m.arm(), &mut q, m.opening);
+            let base = after.agent_state(robot_id).base;
+            after.set_agent_config(robot_id, base, &q);
+            let takes = self.person_takes(&world, &after, o)?;
+            let reached = reached_world(&world, h, &takes);
+            let obstacles = self.obstacles.workspace_in(&reached, self.setup.agent);
+            let Some(hit) = first_hit_on(&m.open(obstacles.clone()), &retreat) else {
+                break (retreat, clear, after, takes);
+            };
+            if Arc::ptr_eq(&around, &self.obstacles.workspace_but_object) {
+                around = obstacles;
+                continue;
             }
+            self.reject(Stage::Trajectory, || {
+                format!("the robot's retreat after handing `{oname}` over hits {hname}: {hit}")
+            });
+            return None;
         };
-        // The world after: the gripper open where the retreat ends, the object in the hand.
-        let mut after = world.clone();
-        let robot_id = self.setup.agent;
-        let mut q = self.q0_full.clone();
-        robot::set_arm_values(m.arm(), &mut q, &end(&retreat)?);
-        robot::set_opening(&self.setup.model, m.arm(), &mut q, m.opening);
-        let base = after.agent_state(robot_id).base;
-        after.set_agent_config(robot_id, base, &q);
         let pose = clear.then(|| world.object_pose(o));
         let retreat = m.record(Phase::Retreat, retreat, Grip::Around(pose));
-        let (motion, person, cleared) = self.person_takes(&world, &after, o)?;
         let hand = &person.arms[motion.arm];
         after.set_agent_config(h, world.agent_state(h).base, &motion.q_end);
         after.attach_with_grasp(o, h, hand.tool_link, motion.grasp);
@@ -125,7 +147,8 @@ impl Search {
     }
 
     /// The robot's retreat once it let go of `o` in `world`: the first of `ways` that is free
-    /// straight, else the arm planned to where the gripper is drawn back each of those ways;
+    /// straight among `around`, else the arm planned to where the gripper is drawn back each
+    /// of those ways (among the obstacles of `world`);
     /// with whether the gripper stays clear of the object. Errs with the last reason when no
     /// way is free.
     fn take_retreat(
@@ -134,9 +157,10 @@ impl Search {
         world: &World,
         o: ObjectId,
         ways: &RetreatWays,
+        around: &Arc<StaticObstacles>,
         rng: &mut fastrand::Rng,
     ) -> Result<(JointPath, bool), String> {
-        let open = m.open(self.obstacles.workspace_but_object.clone());
+        let open = m.open(around.clone());
         let straddle = straddles(
             &open,
             m,
@@ -312,4 +336,31 @@ impl Search {
 struct RetreatWays {
     tool: Pose,
     ways: Vec<(Vector, bool)>,
+}
+
+/// `world` with the person `h` as they are when their hand reaches the object: the taking arm
+/// at the end of its reach, the arms moved out of the way at the end of theirs.
+fn reached_world(
+    world: &World,
+    h: AgentId,
+    takes: &(crate::take::TakeMotion, Arc<RobotSetup>, crate::take::ArmPaths),
+) -> World {
+    let (motion, person, cleared) = takes;
+    let mut q = world.agent_state(h).q.clone();
+    let moves = cleared.iter().map(|(arm, path)| (*arm, path));
+    for (arm, path) in moves.chain([(motion.arm, &motion.reach)]) {
+        if let Some(last) = path.waypoints.last() {
+            robot::set_arm_values(&person.arms[arm], &mut q, last);
+        }
+    }
+    let mut reached = world.clone();
+    reached.set_agent_config(h, world.agent_state(h).base, &q);
+    reached
+}
+
+/// The first collision along `path` (at the motion's checking resolution), in words.
+fn first_hit_on(motion: &robot::ArmMotion<'_>, path: &JointPath) -> Option<String> {
+    path.densify(&motion.arm.space, crate::rrt::RrtParams::default().resolution)
+        .iter()
+        .find_map(|q| motion.collision(q))
 }
