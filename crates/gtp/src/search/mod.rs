@@ -76,8 +76,8 @@ const STRAIGHT_STEPS: usize = 3;
 /// comes back at each candidate (the slowest call of 100 rooms spent 24 failed queries). Of
 /// the queries that find a path there, 99.8 % need fewer than 1,000 nodes.
 const FULL_RRT_FAILURES: usize = 2;
-/// See [`FULL_RRT_FAILURES`]: the least share of the budget, 500 nodes and 10,000 checks.
-const LEAST_RRT_SHARE: usize = 10;
+/// See [`FULL_RRT_FAILURES`]: the least share of the budget, 250 nodes and 5,000 checks.
+const LEAST_RRT_SHARE: usize = 20;
 
 /// The obstacle sets of a search, built once from the world at the start.
 ///
@@ -192,8 +192,11 @@ pub(crate) struct Search {
     /// [`failure::MAX_FAILED_TRANSFERS`]).
     failed_transfers: HashMap<usize, usize>,
     /// Trajectory queries of this call that used up their budget without a path, counted
-    /// with the searches of its base moves (see [`Search::share_rrt_failures`]).
+    /// with the searches of its base moves (see [`Search::as_base_move`]).
     rrt_failures: Arc<AtomicUsize>,
+    /// Whether this search is a base move of a task call (a stance nearby, the drive there
+    /// or back): its base paths share the call's trajectory budget.
+    base_move: bool,
     /// Per grasp choice: its pick, `None` when it cannot be picked up.
     pick_cache: HashMap<usize, Option<PickPlan>>,
     /// Per grasp choice: its motions' shared parts (built on first use).
@@ -286,6 +289,7 @@ impl Search {
             done: false,
             person: None,
             stance_radius: None,
+            base_move: false,
         })
     }
 
@@ -297,18 +301,19 @@ impl Search {
         let halvings = (failures + 1).saturating_sub(FULL_RRT_FAILURES);
         if halvings > 0 {
             let share = (1usize << halvings.min(8)).min(LEAST_RRT_SHARE);
-            p.time_limit /= share as u32;
             p.max_nodes = (p.max_nodes / share).max(2);
             p.max_checks = (p.max_checks / share).max(2);
         }
         p
     }
 
-    /// Counts this search's failed trajectory queries with `call`'s: the searches from other
-    /// base poses are part of the same task call, and each would otherwise start again
-    /// with the full budget.
-    pub(crate) fn share_rrt_failures(mut self, call: &Search) -> Search {
+    /// This search as a base move of `call`: its failed trajectory queries count with the
+    /// call's, since the searches from other base poses are part of the same task call and
+    /// each would otherwise start again with the full budget; its base paths (drives of at
+    /// most a metre) get the call's budget too.
+    pub(crate) fn as_base_move(mut self, call: &Search) -> Search {
         self.rrt_failures = call.rrt_failures.clone();
+        self.base_move = true;
         self
     }
 

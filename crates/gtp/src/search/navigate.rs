@@ -212,7 +212,9 @@ impl Search {
         }
     }
 
-    /// The base's path from the start to `goal` `(x, y, yaw)` (RRT-Connect, 5 cm resolution).
+    /// The base's path from the start to `goal` `(x, y, yaw)` (RRT-Connect, 5 cm resolution):
+    /// with the full budget for `navigate-to`, with the call's (see [`Search::rrt_params`])
+    /// for a base move.
     fn base_path(
         &mut self,
         checker: &CollisionChecker,
@@ -221,19 +223,26 @@ impl Search {
     ) -> Result<JointPath, String> {
         self.stats.planner_calls += 1;
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
+        let mut ck = checker.clone();
         let valid = |b: &[f32]| {
-            let mut ck = checker.clone();
             ck.set_base(geometry::world::base_pose(b[0], b[1], b[2]));
             ck.is_config_free(&start.q)
+        };
+        let budget = if self.base_move {
+            self.rrt_params()
+        } else {
+            self.cfg.rrt.clone()
         };
         let params = RrtParams {
             resolution: 0.05,
             max_step: 0.5,
-            ..self.cfg.rrt.clone()
+            ..budget
         };
-        crate::rrt::plan(&start.space, &start.xy_yaw, &goal, valid, &params, &mut rng)
+        let path = crate::rrt::plan(&start.space, &start.xy_yaw, &goal, valid, &params, &mut rng)
             .map(|(path, _)| path)
-            .map_err(|(e, _)| e.to_string())
+            .map_err(|(e, _)| e);
+        self.note_rrt(&path);
+        path.map_err(|e| e.to_string())
     }
 
     /// The solution of a base path to `base` (`goal`: its x, y, yaw).
