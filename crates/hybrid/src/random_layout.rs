@@ -66,9 +66,9 @@ const NAVIGATE_POSES: usize = 3;
 /// Time limit of one GTP check (pick, navigate-to): a safety net far above what a check takes.
 const CHECK_LIMIT: Duration = Duration::from_secs(20);
 
-/// The planner of a generator's GTP checks: its trajectory queries end at their node cap, not
-/// at the default half-second of wall-clock time, so that a seed gives the same layout however
-/// loaded the machine is.
+/// The planner of a generator's GTP checks: its trajectory queries end at their node or check
+/// budget, never at the default second of wall-clock time, so that a seed gives the same layout
+/// however loaded the machine is.
 pub(crate) fn check_planner() -> Planner {
     let mut config = PlannerConfig::default();
     config.rrt.time_limit = CHECK_LIMIT;
