@@ -17,6 +17,13 @@ use crate::solution::{HeldRecord, Phase, SolutionSummary, Trajectory};
 use super::motions::{GraspMotions, Grip, end, straddles};
 use super::{Failure, STRAIGHT_STEPS, Search, Stage};
 
+/// A person's side of a take: their motions, their setup, the other arms moved out of the way.
+type PersonTake = (
+    crate::take::TakeMotion,
+    Arc<RobotSetup>,
+    crate::take::ArmPaths,
+);
+
 impl Search {
     /// `take(o, h)`: one solution. The object goes to the human's nearest free hand, which
     /// keeps it there, out of the way.
@@ -242,16 +249,7 @@ impl Search {
     /// The person's side of the take: their nearest free hand, else another free hand, else
     /// the nearest with their other arms moved to rest first (a hand blocked by the person's
     /// own other arm); with the other arms' paths, empty unless they moved.
-    fn person_takes(
-        &mut self,
-        before: &World,
-        after: &World,
-        o: ObjectId,
-    ) -> Option<(
-        crate::take::TakeMotion,
-        Arc<RobotSetup>,
-        crate::take::ArmPaths,
-    )> {
+    fn person_takes(&mut self, before: &World, after: &World, o: ObjectId) -> Option<PersonTake> {
         let oname = self.object_name();
         let hname = self.human_name();
         let Some(person) = self.person.clone() else {
@@ -340,11 +338,7 @@ struct RetreatWays {
 
 /// `world` with the person `h` as they are when their hand reaches the object: the taking arm
 /// at the end of its reach, the arms moved out of the way at the end of theirs.
-fn reached_world(
-    world: &World,
-    h: AgentId,
-    takes: &(crate::take::TakeMotion, Arc<RobotSetup>, crate::take::ArmPaths),
-) -> World {
+fn reached_world(world: &World, h: AgentId, takes: &PersonTake) -> World {
     let (motion, person, cleared) = takes;
     let mut q = world.agent_state(h).q.clone();
     let moves = cleared.iter().map(|(arm, path)| (*arm, path));
@@ -360,7 +354,10 @@ fn reached_world(
 
 /// The first collision along `path` (at the motion's checking resolution), in words.
 fn first_hit_on(motion: &robot::ArmMotion<'_>, path: &JointPath) -> Option<String> {
-    path.densify(&motion.arm.space, crate::rrt::RrtParams::default().resolution)
-        .iter()
-        .find_map(|q| motion.collision(q))
+    path.densify(
+        &motion.arm.space,
+        crate::rrt::RrtParams::default().resolution,
+    )
+    .iter()
+    .find_map(|q| motion.collision(q))
 }
