@@ -83,7 +83,7 @@ impl BaseMoves {
             seed,
         )
         .ok()?
-        .as_base_move(search);
+        .into_base_move(search);
         // Level 2 turns the base in place; level 4 steps too.
         stances.stance_radius = Some(radius);
         Some(BaseMoves {
@@ -147,7 +147,7 @@ impl BaseMoves {
             ) else {
                 continue;
             };
-            self.here = Some((drive, search.as_base_move(template)));
+            self.here = Some((drive, search.into_base_move(template)));
         }
     }
 
@@ -177,7 +177,7 @@ impl BaseMoves {
             self.seed,
         )
         .map_err(|e| Failure::at(Stage::Search, e))?
-        .as_base_move(template);
+        .into_base_move(template);
         let out = back.drive_to(goal);
         self.finished.planner_calls += back.stats.planner_calls;
         out

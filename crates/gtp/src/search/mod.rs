@@ -192,7 +192,7 @@ pub(crate) struct Search {
     /// [`failure::MAX_FAILED_TRANSFERS`]).
     failed_transfers: HashMap<usize, usize>,
     /// Trajectory queries of this call that used up their budget without a path, counted
-    /// with the searches of its base moves (see [`Search::as_base_move`]).
+    /// with the searches of its base moves (see [`Search::into_base_move`]).
     rrt_failures: Arc<AtomicUsize>,
     /// Whether this search is a base move of a task call (a stance nearby, the drive there
     /// or back): its base paths share the call's trajectory budget.
@@ -311,7 +311,7 @@ impl Search {
     /// call's, since the searches from other base poses are part of the same task call and
     /// each would otherwise start again with the full budget; its base paths (drives of at
     /// most a metre) get the call's budget too.
-    pub(crate) fn as_base_move(mut self, call: &Search) -> Search {
+    pub(crate) fn into_base_move(mut self, call: &Search) -> Search {
         self.rrt_failures = call.rrt_failures.clone();
         self.base_move = true;
         self
