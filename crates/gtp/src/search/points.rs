@@ -22,13 +22,6 @@ const BIN: f32 = 0.5;
 /// room: 0.92 of it seen by the planner's rays, 0.06 by `htngtp check`'s).
 const HAND_OVER_EYE_CLEARANCE: f32 = 0.3;
 
-/// A hand-over's best points are nearest this far ahead of the person's shoulders and this far
-/// below them (metres): in front of the chest, not under the chin (the best point was next to
-/// the shoulders, and a book given there sat under a standing member's chin, 60 degrees below
-/// their gaze).
-const GIVE_AHEAD: f32 = 0.3;
-const GIVE_BELOW: f32 = 0.15;
-
 /// The most points one candidate grid holds (a surface, or the air between two agents).
 const MAX_GRID_POINTS: f32 = 100_000.0;
 
@@ -257,11 +250,6 @@ impl Search {
                 if kind == TaskKind::Show {
                     // Between the two agents.
                     (mid + mean(robot_shoulders)) * 0.5
-                } else if kind == TaskKind::Give {
-                    // In front of their chest, where a person takes what they are handed.
-                    let ahead = st.base.rotation * Vector::X;
-                    let ahead = Vector::new(ahead.x, ahead.y, 0.0).normalize_or_zero();
-                    mid + ahead * GIVE_AHEAD - Vector::Z * GIVE_BELOW
                 } else {
                     mid
                 }
