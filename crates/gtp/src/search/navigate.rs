@@ -10,7 +10,7 @@ use std::time::Instant;
 use geometry::collision::{CollisionChecker, StaticObstacles};
 use geometry::effort;
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::math::{Pose, Vector};
 
 use crate::planner::Solution;
 use crate::robot;
@@ -335,9 +335,12 @@ fn boxed_in(checker: &CollisionChecker, start: &BaseStart) -> Option<Failure> {
     ))
 }
 
-/// The floor cells the robot's base can reach from where it stands without turning, on a grid
-/// of [`FreeRegion::STEP`] (flood fill, each cell's configuration checked): a cheap test of
-/// whether a base pose is worth a path search.
+/// Headings tried per cell of the free region, over a whole turn.
+const REGION_YAWS: usize = 8;
+
+/// The floor cells the robot's base can reach from where it stands, on a grid of
+/// [`FreeRegion::STEP`] (flood fill, each cell's configuration checked at a few headings): a
+/// cheap test of whether a base pose is worth a path search.
 struct FreeRegion {
     origin: (f32, f32),
     cells: HashSet<(i32, i32)>,
@@ -356,11 +359,14 @@ impl FreeRegion {
     }
 }
 
-/// The free region around the base's start, with the base's rotation there.
+/// The free region around the base's start: the cells where the base fits at one of
+/// [`REGION_YAWS`] headings (the start's first), joined side to side. It may join cells the base
+/// cannot pass between (turning is not checked), never the reverse at those headings: a
+/// filter before path searches, which decide. (At the start's heading only, it split rooms whose
+/// doorway-like gaps the base passes only turned.)
 fn free_region(checker: &CollisionChecker, start: &BaseStart) -> FreeRegion {
     let step = FreeRegion::STEP;
     let origin = (start.xy_yaw[0], start.xy_yaw[1]);
-    let rotation: Rotation = start.pose.rotation;
     let bounds = &start.bounds;
     let mut ck = checker.clone();
     let mut free = |i: i32, j: i32| {
@@ -368,8 +374,11 @@ fn free_region(checker: &CollisionChecker, start: &BaseStart) -> FreeRegion {
         if x < bounds.mins.x || x > bounds.maxs.x || y < bounds.mins.y || y > bounds.maxs.y {
             return false;
         }
-        ck.set_base(Pose::from_parts(Vector::new(x, y, 0.0), rotation));
-        ck.is_config_free(&start.q)
+        (0..REGION_YAWS).any(|k| {
+            let yaw = start.xy_yaw[2] + k as f32 * std::f32::consts::TAU / REGION_YAWS as f32;
+            ck.set_base(geometry::world::base_pose(x, y, yaw));
+            ck.is_config_free(&start.q)
+        })
     };
     let mut cells = HashSet::new();
     let mut todo = vec![(0, 0)];
