@@ -55,47 +55,9 @@ impl Search {
             return None;
         };
         let m = self.grasp_motions(0)?;
-        let ways = self.retreat_ways(&m, &world);
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
-        // The robot draws back while the person's hand is on the object: first planned against
-        // the person as they stand, then, when that hits their reaching arm, against it.
-        let mut around = self.obstacles.workspace_but_object.clone();
-        let (retreat, clear, mut after, (motion, person, cleared)) = loop {
-            let (retreat, clear) = match self.take_retreat(&m, &world, o, &ways, &around, &mut rng)
-            {
-                Ok(r) => r,
-                Err(last) => {
-                    self.reject(Stage::Trajectory, || {
-                        format!(
-                            "no collision-free retreat after handing `{oname}` to {hname}: {last}"
-                        )
-                    });
-                    return None;
-                }
-            };
-            // The world after: the gripper open where the retreat ends, the object in the hand.
-            let mut after = world.clone();
-            let robot_id = self.setup.agent;
-            let mut q = self.q0_full.clone();
-            robot::set_arm_values(m.arm(), &mut q, &end(&retreat)?);
-            robot::set_opening(&self.setup.model, m.arm(), &mut q, m.opening);
-            let base = after.agent_state(robot_id).base;
-            after.set_agent_config(robot_id, base, &q);
-            let takes = self.person_takes(&world, &after, o)?;
-            let reached = reached_world(&world, h, &takes);
-            let obstacles = self.obstacles.workspace_in(&reached, self.setup.agent);
-            let Some(hit) = first_hit_on(&m.open(obstacles.clone()), &retreat) else {
-                break (retreat, clear, after, takes);
-            };
-            if Arc::ptr_eq(&around, &self.obstacles.workspace_but_object) {
-                around = obstacles;
-                continue;
-            }
-            self.reject(Stage::Trajectory, || {
-                format!("the robot's retreat after handing `{oname}` over hits {hname}: {hit}")
-            });
-            return None;
-        };
+        let (retreat, clear, mut after, (motion, person, cleared)) =
+            self.retreat_and_take(&m, &world, o, &mut rng)?;
         let pose = clear.then(|| world.object_pose(o));
         let retreat = m.record(Phase::Retreat, retreat, Grip::Around(pose));
         let hand = &person.arms[motion.arm];
@@ -130,6 +92,54 @@ impl Search {
             human_motion(Phase::Withdraw, motion.arm, &motion.withdraw, Some(held)),
         ]);
         Some(self.take_solution(after, level, trajectories))
+    }
+
+    /// The robot's retreat after letting go of `o` and the person's take, with the world
+    /// after the retreat. The robot draws back while the person's hand is on the object: the
+    /// retreat is first planned against the person as they stand, then, when it hits their
+    /// reaching arm, once more against it; `None` (the reason recorded) when neither clears it.
+    fn retreat_and_take(
+        &mut self,
+        m: &GraspMotions,
+        world: &World,
+        o: ObjectId,
+        rng: &mut fastrand::Rng,
+    ) -> Option<(JointPath, bool, World, PersonTake)> {
+        let (oname, hname) = (self.object_name(), self.human_name());
+        let ways = self.retreat_ways(m, world);
+        let mut around = self.obstacles.workspace_but_object.clone();
+        for pass in 0..2 {
+            let (retreat, clear) = match self.take_retreat(m, world, o, &ways, &around, rng) {
+                Ok(r) => r,
+                Err(last) => {
+                    self.reject(Stage::Trajectory, || {
+                        format!(
+                            "no collision-free retreat after handing `{oname}` to {hname}: {last}"
+                        )
+                    });
+                    return None;
+                }
+            };
+            // The world after: the gripper open where the retreat ends, the object in the hand.
+            let mut after = world.clone();
+            let robot_id = self.setup.agent;
+            let mut q = self.q0_full.clone();
+            robot::set_arm_values(m.arm(), &mut q, &end(&retreat)?);
+            robot::set_opening(&self.setup.model, m.arm(), &mut q, m.opening);
+            let base = after.agent_state(robot_id).base;
+            after.set_agent_config(robot_id, base, &q);
+            let takes = self.person_takes(world, &after, o)?;
+            let reached = reached_world(world, self.human?, &takes);
+            around = self.obstacles.workspace_in(&reached, robot_id);
+            match first_hit_on(&m.open(around.clone()), &retreat) {
+                None => return Some((retreat, clear, after, takes)),
+                Some(hit) if pass == 1 => self.reject(Stage::Trajectory, || {
+                    format!("the robot's retreat after handing `{oname}` over hits {hname}: {hit}")
+                }),
+                Some(_) => {}
+            }
+        }
+        None
     }
 
     /// The ways the robot's gripper may draw back from the object it let go: straight back
