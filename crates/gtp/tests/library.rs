@@ -522,6 +522,83 @@ l_wrist_roll_joint = -0.304
     }
 }
 
+/// A wall with a gap the PR2's base (about 0.67 m square) passes only turned square to it, the
+/// robot standing at 45 degrees: the free region that screens base poses joins the far side
+/// (the base fits the gap at another heading), so a pose there gets a path search, not a "not
+/// connected"; a gap narrower than the base at every heading splits the room. Trajectory
+/// queries get 2 nodes, so that every one but a straight drive fails and the screen decides.
+#[test]
+fn the_free_region_joins_rooms_through_a_gap_the_base_passes_turned() {
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    let room = |gap: f32| {
+        // The wall at x = 1.0 from y = -2 to 2, open between y = 1.0 -/+ gap / 2.
+        let (lo, hi) = (1.0 - gap / 2.0, 1.0 + gap / 2.0);
+        let (s_half, s_mid) = ((lo + 2.0) / 2.0, (lo - 2.0) / 2.0);
+        let (n_half, n_mid) = ((2.0 - hi) / 2.0, (2.0 + hi) / 2.0);
+        let text = format!(
+            r#"
+[scene]
+bounds = {{ min = [-1.5, -2.0, -0.05], max = [3.0, 2.0, 2.0] }}
+[[objects]]
+name = "wall-s"
+shape = {{ box = [0.02, {s_half}, 0.5] }}
+pose = {{ xyz = [1.0, {s_mid}, 0.5] }}
+[[objects]]
+name = "wall-n"
+shape = {{ box = [0.02, {n_half}, 0.5] }}
+pose = {{ xyz = [1.0, {n_mid}, 0.5] }}
+[[objects]]
+name = "crate"
+shape = {{ box = [0.2, 0.2, 0.45] }}
+pose = {{ xyz = [2.4, -1.0, 0.45] }}
+movable = true
+[[agents]]
+name = "pr2"
+kind = "robot"
+urdf = "{urdf}"
+base = {{ x = 0, y = -1.0, yaw = 45 }}
+[agents.joints]
+torso_lift_joint = 0.3
+r_shoulder_pan_joint = -0.383
+r_shoulder_lift_joint = 0.886
+r_upper_arm_roll_joint = -0.895
+r_elbow_flex_joint = -2.321
+r_forearm_roll_joint = 0.501
+r_wrist_flex_joint = -1.479
+r_wrist_roll_joint = 0.304
+l_shoulder_pan_joint = 0.383
+l_shoulder_lift_joint = 0.886
+l_upper_arm_roll_joint = 0.895
+l_elbow_flex_joint = -2.321
+l_forearm_roll_joint = -0.501
+l_wrist_flex_joint = -1.479
+l_wrist_roll_joint = -0.304
+"#,
+            urdf = models.join("pr2.urdf").display()
+        );
+        World::from_scene(
+            geometry::scene::Scene::from_str(&text, "gap.toml", std::path::Path::new("."), "gap")
+                .unwrap(),
+        )
+        .unwrap()
+    };
+    let mut config = gtp::planner::PlannerConfig::default();
+    config.rrt.max_nodes = 2;
+    let planner = Planner::with_config(config);
+    let failure = |gap: f32| {
+        let world = room(gap);
+        let mut stream = planner
+            .run(&world, "navigate-to", &["crate"], &CallOptions::seeded(1))
+            .unwrap();
+        assert!(stream.next().is_none(), "gap {gap}: a straight drive");
+        stream.failure().unwrap().message.clone()
+    };
+    let turned = failure(0.8);
+    assert!(!turned.contains("not connected"), "0.8 m gap: {turned}");
+    let narrow = failure(0.5);
+    assert!(narrow.contains("not connected"), "0.5 m gap: {narrow}");
+}
+
 /// Give, then take: the member ends with the book in a hand, the robot's gripper open and
 /// drawn back along a trajectory that re-checks; the gripper is free for the next pick.
 #[test]
