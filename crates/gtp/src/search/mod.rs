@@ -52,8 +52,8 @@ use parry3d::math::Vector;
 
 use crate::placement::{self, RestingFace};
 use crate::planner::{PlannerConfig, Solution, Task};
-use crate::robot::{self, RobotSetup};
-use crate::rrt::{RrtError, RrtParams};
+use crate::robot::{self, ArmMotion, RobotSetup};
+use crate::rrt::{JointPath, RrtError, RrtParams, RrtStats};
 use crate::stats::Stats;
 use crate::task::{Constraints, TaskKind};
 
@@ -315,6 +315,21 @@ impl Search {
         self.rrt_failures = call.rrt_failures.clone();
         self.base_move = true;
         self
+    }
+
+    /// One trajectory query of this call for `motion` from `from` to `to`: counted, with the
+    /// call's budget ([`Search::rrt_params`]), its failure noted ([`Search::note_rrt`]).
+    fn plan_motion(
+        &mut self,
+        motion: &ArmMotion<'_>,
+        from: &[f32],
+        to: &[f32],
+        rng: &mut fastrand::Rng,
+    ) -> Result<(JointPath, RrtStats), RrtError> {
+        self.stats.planner_calls += 1;
+        let planned = motion.plan(from, to, &self.rrt_params(), rng);
+        self.note_rrt(&planned);
+        planned
     }
 
     /// Counts a trajectory query that used up its budget (node, check or time limit).

@@ -305,10 +305,7 @@ impl Search {
         };
         let open_all = m.open(self.obstacles.workspace.clone());
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
-        self.stats.planner_calls += 1;
-        let planned = open_all.plan(&m.q0, &q_pre, &self.rrt_params(), &mut rng);
-        self.note_rrt(&planned);
-        match planned {
+        match self.plan_motion(&open_all, &m.q0, &q_pre, &mut rng) {
             Ok((p, _)) => {
                 if let Some(Some(plan)) = self.pick_cache.get_mut(&grasp) {
                     plan.approach = Some(p);

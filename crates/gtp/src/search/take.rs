@@ -131,7 +131,8 @@ impl Search {
             let takes = self.person_takes(world, &after, o)?;
             let reached = reached_world(world, self.human?, &takes);
             around = self.obstacles.workspace_in(&reached, robot_id);
-            match first_hit_on(&m.open(around.clone()), &retreat) {
+            let resolution = self.cfg.rrt.resolution;
+            match first_hit_on(&m.open(around.clone()), &retreat, resolution) {
                 None => return Some((retreat, clear, after, takes)),
                 Some(hit) if pass == 1 => self.reject(Stage::Trajectory, || {
                     format!("the robot's retreat after handing `{oname}` over hits {hname}: {hit}")
@@ -239,15 +240,10 @@ impl Search {
                 rng,
             );
             match ik {
-                Ok(q_back) => {
-                    self.stats.planner_calls += 1;
-                    let planned = clear_all.plan(&m.q0, &q_back, &self.rrt_params(), rng);
-                    self.note_rrt(&planned);
-                    match planned {
-                        Ok((p, _)) => return Ok(p),
-                        Err(e) => last = e.to_string(),
-                    }
-                }
+                Ok(q_back) => match self.plan_motion(&clear_all, &m.q0, &q_back, rng) {
+                    Ok((p, _)) => return Ok(p),
+                    Err(e) => last = e.to_string(),
+                },
                 Err(e) => {
                     last = e.unwrap_or_else(|| "no inverse kinematics drawn back".into());
                 }
@@ -362,12 +358,13 @@ fn reached_world(world: &World, h: AgentId, takes: &PersonTake) -> World {
     reached
 }
 
-/// The first collision along `path` (at the motion's checking resolution), in words.
-fn first_hit_on(motion: &robot::ArmMotion<'_>, path: &JointPath) -> Option<String> {
-    path.densify(
-        &motion.arm.space,
-        crate::rrt::RrtParams::default().resolution,
-    )
-    .iter()
-    .find_map(|q| motion.collision(q))
+/// The first collision along `path`, checked every `resolution` of joint motion, in words.
+fn first_hit_on(
+    motion: &robot::ArmMotion<'_>,
+    path: &JointPath,
+    resolution: f32,
+) -> Option<String> {
+    path.densify(&motion.arm.space, resolution)
+        .iter()
+        .find_map(|q| motion.collision(q))
 }

@@ -363,9 +363,7 @@ impl Search {
         let oname = self.object_name();
         let grasp = c.tuple.grasp;
         let (from, mut trajectories) = self.carry_start(m, grasp)?;
-        self.stats.planner_calls += 1;
-        let transfer = held.plan(&from, &c.q_place, &self.rrt_params(), rng);
-        self.note_rrt(&transfer);
+        let transfer = self.plan_motion(held, &from, &c.q_place, rng);
         let transfer = self.transfer_or_reject(transfer, grasp, || {
             format!("no collision-free trajectory to hand `{oname}` over")
         })?;
@@ -396,15 +394,11 @@ impl Search {
             self.obstacles
                 .workspace_after_release(&c.after, self.setup.agent, released);
         let open_after = m.open(obstacles);
-        self.stats.planner_calls += 1;
-        let home = open_after.plan(&moves.q_retreat, &m.q0, &self.rrt_params(), rng);
-        self.note_rrt(&home);
+        let home = self.plan_motion(&open_after, &moves.q_retreat, &m.q0, rng);
         let home = self.or_reject(home.map(|(p, _)| p), Stage::Trajectory, || {
             format!("no collision-free return of the arm after placing `{oname}`")
         })?;
-        self.stats.planner_calls += 1;
-        let transfer = held.plan(&from, &moves.q_above, &self.rrt_params(), rng);
-        self.note_rrt(&transfer);
+        let transfer = self.plan_motion(held, &from, &moves.q_above, rng);
         let transfer = self.transfer_or_reject(transfer, grasp, || {
             format!("no collision-free trajectory carrying `{oname}`")
         })?;
