@@ -434,12 +434,46 @@ fn navigate_to_furniture_reaches_its_support_surface() {
     }
 }
 
+/// A world of the bundled PR2, its arms tucked, standing at `(x, y, yaw in degrees)` in the
+/// scene `objects` (its `[scene]` table and `[[objects]]`).
+fn tucked_pr2_world(objects: &str, (x, y, yaw): (f32, f32, f32)) -> World {
+    let urdf = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/pr2.urdf");
+    let text = format!(
+        r#"{objects}
+[[agents]]
+name = "pr2"
+kind = "robot"
+urdf = "{urdf}"
+base = {{ x = {x}, y = {y}, yaw = {yaw} }}
+[agents.joints]
+torso_lift_joint = 0.3
+r_shoulder_pan_joint = -0.383
+r_shoulder_lift_joint = 0.886
+r_upper_arm_roll_joint = -0.895
+r_elbow_flex_joint = -2.321
+r_forearm_roll_joint = 0.501
+r_wrist_flex_joint = -1.479
+r_wrist_roll_joint = 0.304
+l_shoulder_pan_joint = 0.383
+l_shoulder_lift_joint = 0.886
+l_upper_arm_roll_joint = 0.895
+l_elbow_flex_joint = -2.321
+l_forearm_roll_joint = -0.501
+l_wrist_flex_joint = -1.479
+l_wrist_roll_joint = -0.304
+"#,
+        urdf = urdf.display()
+    );
+    let scene =
+        geometry::scene::Scene::from_str(&text, "pr2.toml", std::path::Path::new("."), "pr2");
+    World::from_scene(scene.unwrap()).unwrap()
+}
+
 /// A PR2 in a closed pen, its target outside: navigate-to fails on the free region (the poses
 /// near the target are not connected to where the robot stands), not after a path search to
 /// every candidate pose; with the pen's walls against the base, at once.
 #[test]
 fn navigate_to_says_when_the_base_is_penned_in() {
-    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
     let pen = |gap: f32, open: bool| {
         let h = 0.36 + gap; // the PR2's base is about 0.67 m square
         // The east wall stands between the robot and the crate; open, it is far away.
@@ -469,36 +503,10 @@ name = "crate"
 shape = {{ box = [0.2, 0.2, 0.45] }}
 pose = {{ xyz = [2.2, 0.0, 0.45] }}
 movable = true
-[[agents]]
-name = "pr2"
-kind = "robot"
-urdf = "{urdf}"
-base = {{ x = 0, y = 0, yaw = 0 }}
-[agents.joints]
-torso_lift_joint = 0.3
-r_shoulder_pan_joint = -0.383
-r_shoulder_lift_joint = 0.886
-r_upper_arm_roll_joint = -0.895
-r_elbow_flex_joint = -2.321
-r_forearm_roll_joint = 0.501
-r_wrist_flex_joint = -1.479
-r_wrist_roll_joint = 0.304
-l_shoulder_pan_joint = 0.383
-l_shoulder_lift_joint = 0.886
-l_upper_arm_roll_joint = 0.895
-l_elbow_flex_joint = -2.321
-l_forearm_roll_joint = -0.501
-l_wrist_flex_joint = -1.479
-l_wrist_roll_joint = -0.304
 "#,
             w = h + 0.02,
-            urdf = models.join("pr2.urdf").display()
         );
-        World::from_scene(
-            geometry::scene::Scene::from_str(&text, "pen.toml", std::path::Path::new("."), "pen")
-                .unwrap(),
-        )
-        .unwrap()
+        tucked_pr2_world(&text, (0.0, 0.0, 0.0))
     };
     let planner = Planner::new();
     let world = pen(0.12, true);
@@ -529,7 +537,6 @@ l_wrist_roll_joint = -0.304
 /// queries get 2 nodes, so that every one but a straight drive fails and the screen decides.
 #[test]
 fn the_free_region_joins_rooms_through_a_gap_the_base_passes_turned() {
-    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
     let room = |gap: f32| {
         // The wall at x = 1.0 from y = -2 to 2, open between y = 1.0 -/+ gap / 2.
         let (lo, hi) = (1.0 - gap / 2.0, 1.0 + gap / 2.0);
@@ -552,35 +559,9 @@ name = "crate"
 shape = {{ box = [0.2, 0.2, 0.45] }}
 pose = {{ xyz = [2.4, -1.0, 0.45] }}
 movable = true
-[[agents]]
-name = "pr2"
-kind = "robot"
-urdf = "{urdf}"
-base = {{ x = 0, y = -1.0, yaw = 45 }}
-[agents.joints]
-torso_lift_joint = 0.3
-r_shoulder_pan_joint = -0.383
-r_shoulder_lift_joint = 0.886
-r_upper_arm_roll_joint = -0.895
-r_elbow_flex_joint = -2.321
-r_forearm_roll_joint = 0.501
-r_wrist_flex_joint = -1.479
-r_wrist_roll_joint = 0.304
-l_shoulder_pan_joint = 0.383
-l_shoulder_lift_joint = 0.886
-l_upper_arm_roll_joint = 0.895
-l_elbow_flex_joint = -2.321
-l_forearm_roll_joint = -0.501
-l_wrist_flex_joint = -1.479
-l_wrist_roll_joint = -0.304
-"#,
-            urdf = models.join("pr2.urdf").display()
+"#
         );
-        World::from_scene(
-            geometry::scene::Scene::from_str(&text, "gap.toml", std::path::Path::new("."), "gap")
-                .unwrap(),
-        )
-        .unwrap()
+        tucked_pr2_world(&text, (0.0, -1.0, 45.0))
     };
     let mut config = gtp::planner::PlannerConfig::default();
     config.rrt.max_nodes = 2;
