@@ -761,13 +761,15 @@ fn plan_call(
     max_acceleration: f64,
     allow_initial_contact: bool,
 ) -> PyResult<String> {
-    let strategy = match strategy {
-        "symbolic" => Strategy::Symbolic,
-        "chronological" => Strategy::Chronological,
-        "geometric-first" | "geometric_first" => Strategy::GeometricFirst { k: geo_k },
+    let (strategy, discrepancy_rounds) = match strategy {
+        "symbolic" => (Strategy::Symbolic, true),
+        "chronological" => (Strategy::Chronological, true),
+        "plain-chronological" | "plain_chronological" => (Strategy::Chronological, false),
+        "geometric-first" | "geometric_first" => (Strategy::GeometricFirst { k: geo_k }, true),
         other => {
             return Err(PyValueError::new_err(format!(
-                "unknown strategy `{other}`: expected symbolic, chronological or geometric-first"
+                "unknown strategy `{other}`: expected symbolic, chronological, \
+                 plain-chronological or geometric-first"
             )));
         }
     };
@@ -788,6 +790,7 @@ fn plan_call(
             },
             seed,
             strategy,
+            discrepancy_rounds,
             ..PlannerOptions::default()
         },
         time_limit,

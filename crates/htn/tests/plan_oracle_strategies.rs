@@ -6,8 +6,9 @@
 //! With two light books (`desk-light`), Symbolic and Chronological both give the second book by
 //! hand (the newest choice point is its method), while GeometricFirst moves the first book to
 //! the back and puts both on the desk. With the second book heavy (`desk-heavy`), Symbolic must
-//! change HTN choices (second book first on the desk, first by hand), while Chronological and
-//! GeometricFirst re-place the first book.
+//! change HTN choices (second book first on the desk, first by hand), and so does
+//! Chronological in its first round of limited discrepancy (first geometric solutions only),
+//! while plain chronological backtracking and GeometricFirst re-place the first book.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -219,10 +220,32 @@ fn heavy_book_symbolic_changes_the_htn_choices() {
 }
 
 #[test]
-fn heavy_book_chronological_replaces_the_first_book() {
+fn heavy_book_chronological_changes_htn_choices_in_its_first_round() {
     let (s, st) = run("desk-heavy.hddl", Strategy::Chronological);
+    assert_eq!(s, ["makebkacc b2@p1", "givebk b1"]);
+    assert_eq!((st.geo_backtracks, st.discrepancy_round), (0, 0));
+}
+
+#[test]
+fn heavy_book_plain_chronological_replaces_the_first_book() {
+    let opts = PlannerOptions {
+        strategy: Strategy::Chronological,
+        discrepancy_rounds: false,
+        ..PlannerOptions::default()
+    };
+    let (s, st) = run_with("desk-heavy.hddl", &opts, false);
     assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
     assert_eq!(st.geo_backtracks, 1);
+}
+
+/// Both books heavy: only the first book at the back works, one geometric task off its first
+/// solution, which the second round of limited discrepancy allows.
+#[test]
+fn chronological_rounds_allow_one_more_geometric_alternative_each() {
+    let (s, st) = run("desk-both-heavy.hddl", Strategy::Chronological);
+    assert_eq!(s, ["makebkacc b1@p2", "makebkacc b2@p1"]);
+    assert_eq!((st.geo_backtracks, st.discrepancy_round), (1, 1));
+    assert_eq!(st.iterations, 2);
 }
 
 #[test]

@@ -44,7 +44,8 @@ pub struct Args {
     /// Print the result as JSON: status, plan, plan text, statistics, limit.
     #[arg(long)]
     pub json: bool,
-    /// Backtracking over geometric solutions: symbolic, chronological or geometric-first.
+    /// Backtracking over geometric solutions: symbolic, chronological, plain-chronological or
+    /// geometric-first.
     #[arg(long, value_enum, default_value_t = StrategyArg::Chronological)]
     pub strategy: StrategyArg,
     /// With --strategy geometric-first: how many other geometric solutions to try per failure,
@@ -131,10 +132,29 @@ fn share(s: &str) -> Result<f64, String> {
 pub enum StrategyArg {
     /// Each geometric task gives at most one solution; only HTN choices are revisited.
     Symbolic,
-    /// Every choice point, latest first.
+    /// Every choice point, latest first, in rounds that allow more and more geometric tasks
+    /// off their first solution (0, 1, 2, ...: limited discrepancy); as complete as
+    /// plain-chronological.
     Chronological,
+    /// Every choice point, latest first, in one search: every solution of the latest
+    /// geometric task before an earlier one is revisited (the paper's interleaved
+    /// backtracking; for comparison).
+    PlainChronological,
     /// On a geometric failure, try other solutions of earlier geometric tasks first.
     GeometricFirst,
+}
+
+impl StrategyArg {
+    /// The planner's strategy, with `k` other solutions per geometric-first repair, and
+    /// whether its chronological search goes in rounds of limited discrepancy.
+    pub fn options(self, k: usize) -> (Strategy, bool) {
+        match self {
+            StrategyArg::Symbolic => (Strategy::Symbolic, true),
+            StrategyArg::Chronological => (Strategy::Chronological, true),
+            StrategyArg::PlainChronological => (Strategy::Chronological, false),
+            StrategyArg::GeometricFirst => (Strategy::GeometricFirst { k }, true),
+        }
+    }
 }
 
 pub fn run(args: Args) -> anyhow::Result<u8> {
@@ -147,6 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     crate::input::set_budget(began, args.time_limit, args.memory_limit);
     let domain = crate::input::load_domain(&args.domain)?;
     let problem = htn::load_problem(&args.problem, &domain)?;
+    let (strategy, discrepancy_rounds) = args.strategy.options(args.geo_k);
     let options = PlannerOptions {
         limits: Limits {
             // The time limit covers parsing: the planner gets what is left.
@@ -155,11 +176,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             memory_mb: Some(args.memory_limit),
         },
         seed: args.seed,
-        strategy: match args.strategy {
-            StrategyArg::Symbolic => Strategy::Symbolic,
-            StrategyArg::Chronological => Strategy::Chronological,
-            StrategyArg::GeometricFirst => Strategy::GeometricFirst { k: args.geo_k },
-        },
+        strategy,
+        discrepancy_rounds,
         duplicate_detection: !args.no_duplicate_detection,
         loop_check: !args.no_loop_check,
         goal_guards: !args.no_goal_guards,

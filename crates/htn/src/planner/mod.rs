@@ -41,6 +41,16 @@
 //!   added) still hold; else the node is a dead end (Multiarm-Blocksworld's consumed
 //!   `goal_on` markers).
 //!
+//! Chronological backtracking goes in rounds of limited discrepancy over geometric solutions
+//! (`search/driver.rs`; Harvey and Ginsberg's LDS): round 0 takes every geometric task's first
+//! solution and revisits HTN choices only (the symbolic strategy's search), round `r` lets at
+//! most `r` geometric tasks of a path take another solution, each among its first `2^r + 1`.
+//! A round that cut no solution off was the plain chronological search, so its failure proves
+//! that no plan exists. Plain chronological backtracking (`discrepancy_rounds` off) goes
+//! through every solution of the latest geometric task, times every solution of the ones
+//! between, before it revisits an earlier one: in random rooms, thousands of placements of the
+//! POS machine before the HTN alternative that works.
+//!
 //! Geometric-first's chronological pass (`search/driver.rs`): with geometric tasks, the
 //! repairs get the first `1 - chronological_share` of the time limit (all of it without one);
 //! when that is used, or the search ends with geometric solutions untried, it starts again
@@ -74,7 +84,8 @@ pub enum Strategy {
     /// Each geometric task gives at most its first solution; only HTN choices are revisited
     /// (the paper's experiment).
     Symbolic,
-    /// Every choice point, latest first (interleaved backtracking).
+    /// Every choice point, latest first (interleaved backtracking), in rounds of limited
+    /// discrepancy over the geometric solutions (see [`PlannerOptions::discrepancy_rounds`]).
     #[default]
     Chronological,
     /// On a geometric failure (a GS action with no solution, or a task none of whose methods
@@ -150,6 +161,14 @@ pub struct PlannerOptions {
     /// spent). 0 gives the repairs all the time (the pass only after them).
     #[serde(default = "default_chronological_share")]
     pub chronological_share: f64,
+    /// Chronological backtracking over geometric solutions in rounds of limited discrepancy
+    /// (`search/driver.rs`): round `r` takes a solution other than the first at no more than
+    /// `r` geometric tasks of a path, and only among each task's first `2^r + 1`; a round that
+    /// cut nothing off is the plain chronological search, so the rounds are as complete. Off:
+    /// one plain chronological search, which goes through every solution of the latest
+    /// geometric task before it revisits an earlier one.
+    #[serde(default = "default_true")]
+    pub discrepancy_rounds: bool,
 }
 
 fn default_true() -> bool {
@@ -176,6 +195,7 @@ impl Default for PlannerOptions {
             goal_guards: true,
             best_first_share: default_best_first_share(),
             chronological_share: default_chronological_share(),
+            discrepancy_rounds: true,
         }
     }
 }
@@ -215,18 +235,23 @@ pub struct SearchStats {
     pub guarded_goals: u32,
     /// Nodes cut off by the task-network length bound.
     pub depth_cutoffs: u64,
-    /// Searches run (1 + restarts with a doubled bound).
+    /// Searches run (1 + restarts: with a doubled bound, or for a round of limited
+    /// discrepancy).
     pub iterations: u32,
     /// The task-network length bound of the last iteration.
     pub depth_bound: usize,
     /// Geometric-first repairs attempted and those that succeeded.
     pub geo_repairs: u64,
     pub geo_repairs_succeeded: u64,
-    /// Whether the best-first fallback search ran, and the nodes it expanded (counted in
-    /// `nodes` too).
     /// Geometric-first's repairs were spent without a plan and a chronological pass followed.
     #[serde(default)]
     pub chronological_after_repairs: bool,
+    /// The last round of limited discrepancy the chronological search ran (0: only first
+    /// geometric solutions; see [`PlannerOptions::discrepancy_rounds`]).
+    #[serde(default)]
+    pub discrepancy_round: u32,
+    /// Whether the best-first fallback search ran, and the nodes it expanded (counted in
+    /// `nodes` too).
     #[serde(default)]
     pub best_first: bool,
     #[serde(default)]

@@ -133,6 +133,10 @@ pub(crate) struct Search<'a, 'o> {
     cutoff: bool,
     /// Whether a geometric task was asked under a strategy that caps its solutions.
     geo_capped: bool,
+    /// The chronological search's round of limited discrepancy (`None`: no rounds, every
+    /// geometric solution), and whether the round cut a solution off.
+    discrepancy: Option<u32>,
+    discrepancy_cut: bool,
     /// Whether the left-recursion check is on (off in the complete fallback search).
     loop_check: bool,
     stats: SearchStats,
@@ -213,6 +217,8 @@ impl<'a, 'o> Search<'a, 'o> {
             bound: opts.initial_depth_bound.max(1),
             cutoff: false,
             geo_capped: false,
+            discrepancy: opts.discrepancy_rounds.then_some(0),
+            discrepancy_cut: false,
             loop_check: opts.loop_check,
             start: Instant::now(),
             watch: Watch::new(

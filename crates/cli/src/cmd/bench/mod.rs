@@ -154,13 +154,25 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     }
 }
 
-fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Strategy, &'static str) {
+/// The planner's options for `--strategy`: the strategy, whether its chronological search
+/// goes in rounds of limited discrepancy, and the name results are filed under.
+fn strategy(arg: crate::cmd::plan::StrategyArg, k: usize) -> (Chosen, &'static str) {
     use crate::cmd::plan::StrategyArg as S;
-    match arg {
-        S::Symbolic => (Strategy::Symbolic, "symbolic"),
-        S::Chronological => (Strategy::Chronological, "chronological"),
-        S::GeometricFirst => (Strategy::GeometricFirst { k }, "geometric-first"),
-    }
+    let (strategy, rounds) = arg.options(k);
+    let name = match arg {
+        S::Symbolic => "symbolic",
+        S::Chronological => "chronological",
+        S::PlainChronological => "plain-chronological",
+        S::GeometricFirst => "geometric-first",
+    };
+    (Chosen { strategy, rounds }, name)
+}
+
+/// A strategy as `--strategy` chose it.
+#[derive(Clone, Copy)]
+struct Chosen {
+    strategy: Strategy,
+    rounds: bool,
 }
 
 /// Refuses `--runs 0` and an `--only` index past the last run.
@@ -175,10 +187,11 @@ fn check_runs(runs: usize, only: Option<usize>) -> anyhow::Result<()> {
 }
 
 /// The options of one benchmark run: `strategy`, the time limit in seconds, default oracle.
-fn run_options(strategy: Strategy, time_limit: f64) -> RunOptions {
+fn run_options(chosen: Chosen, time_limit: f64) -> RunOptions {
     RunOptions {
         planner: PlannerOptions {
-            strategy,
+            strategy: chosen.strategy,
+            discrepancy_rounds: chosen.rounds,
             limits: htn::planner::Limits {
                 time: Some(crate::input::duration(time_limit)),
                 ..Default::default()

@@ -235,6 +235,10 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
                 loop {
                     let idx = self.geo_frames[g].current + 1;
+                    if !self.within_discrepancy(idx) {
+                        self.discrepancy_cut = true;
+                        return Ok(false);
+                    }
                     if !self.fetch(g, idx)? {
                         return Ok(false);
                     }
@@ -246,6 +250,19 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
             }
         }
+    }
+
+    /// Whether the current round of limited discrepancy lets the top geometric frame take
+    /// its solution `idx` (> 0): at most `r` frames of the path off their first solution in
+    /// round `r`, each among its first `2^r + 1`.
+    fn within_discrepancy(&self, idx: usize) -> bool {
+        let Some(r) = self.discrepancy else {
+            return true;
+        };
+        // The top frame itself is the one about to leave its first solution, or off it.
+        let others = self.geo_frames.iter().rev().skip(1);
+        let off = others.filter(|f| f.current > 0).count();
+        off < r as usize && idx <= 1usize << r.min(30)
     }
 
     /// Takes the next method-and-binding choice of HTN frame `h` (the top frame, restored):

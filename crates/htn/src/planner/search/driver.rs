@@ -1,5 +1,6 @@
 //! The driver over the engines: depth-first iterations with a doubling depth bound (and one
-//! more without the left-recursion check before calling a problem unsolvable), the
+//! more without the left-recursion check before calling a problem unsolvable), the rounds of
+//! limited discrepancy of chronological backtracking (until one cuts nothing off), the
 //! chronological pass after geometric-first's repairs (when they are spent or have used their
 //! share of the time limit), and the fallback to the best-first engine after the depth-first
 //! one's share of the time limit.
@@ -51,6 +52,11 @@ impl<'a, 'o> Search<'a, 'o> {
                     };
                 }
                 Stop::Exhausted => {
+                    if self.discrepancy_cut {
+                        // The round cut geometric solutions off: the next allows more.
+                        self.next_discrepancy_round();
+                        continue;
+                    }
                     if self.loop_check && self.stats.loops_pruned > loops_before {
                         // The left-recursion check may have cut off the only plans: search
                         // again without it before calling the problem unsolvable.
@@ -101,6 +107,15 @@ impl Search<'_, '_> {
     /// repairs' budget spent): a chronological pass comes next.
     fn repairs_spent(&self) -> bool {
         self.geo_capped && matches!(self.opts.strategy, Strategy::GeometricFirst { .. })
+    }
+
+    /// Starts the next round of limited discrepancy from the initial node.
+    fn next_discrepancy_round(&mut self) {
+        let r = self.discrepancy.map_or(0, |r| r + 1);
+        self.discrepancy = Some(r);
+        self.discrepancy_cut = false;
+        self.stats.discrepancy_round = r;
+        self.reset();
     }
 
     /// Starts the chronological pass that follows geometric-first's repairs.

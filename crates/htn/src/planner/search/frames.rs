@@ -134,6 +134,11 @@ impl<T> ChoiceStack<T> {
     fn pop(&mut self) -> Option<T> {
         self.0.pop()
     }
+
+    /// The frames, oldest first.
+    pub(super) fn iter(&self) -> std::slice::Iter<'_, T> {
+        self.0.iter()
+    }
 }
 
 impl<T> Index<ChoiceId<T>> for ChoiceStack<T> {
