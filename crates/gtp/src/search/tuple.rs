@@ -245,8 +245,12 @@ impl Search {
             rng,
         );
         match r {
-            Ok(q) => Some(q),
+            Ok(q) => {
+                self.cursor.ik_reached = true;
+                Some(q)
+            }
             Err(None) => {
+                self.cursor.ik_misses += 1;
                 self.reject(Stage::Ik, || {
                     format!(
                         "no placement of `{oname}` is within the arm's reach (inverse kinematics)"
@@ -255,6 +259,7 @@ impl Search {
                 None
             }
             Err(Some(c)) => {
+                self.cursor.ik_reached = true;
                 self.reject(Stage::Ik, || {
                     format!("the arm collides at every placement of `{oname}` ({c})")
                 });
