@@ -54,6 +54,7 @@ pub mod random_layout;
 pub mod room_layout;
 pub mod run;
 pub mod scale;
+mod stream_memo;
 pub mod timing;
 
 pub use oracle::{GtpOracle, OracleConfig};

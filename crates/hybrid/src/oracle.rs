@@ -23,6 +23,8 @@ use gtp::stats::Stats;
 use htn::oracle::{GeoSolution, GeometricOracle, GroundAtom, OracleError, SolutionId, StreamId};
 use serde::Serialize;
 
+use crate::stream_memo::{End, Known, Request, StreamMemo};
+
 /// Settings of the oracle.
 #[derive(Clone, Debug)]
 pub struct OracleConfig {
@@ -117,6 +119,8 @@ struct Frame {
     world: World,
     facts: Arc<BTreeSet<GroundAtom>>,
     fingerprint: u64,
+    /// Every bit of the world, for the memo of requests.
+    exact: u64,
 }
 
 /// A solution given out to the HTN search: the world after it, with its literals, and what
@@ -126,23 +130,19 @@ struct Given {
     summary: SolutionSummary,
 }
 
-/// An open solution stream of one GTP task.
+/// An open solution stream of the HTN search: its request, and how many of the request's
+/// solutions it has read.
 struct Stream {
-    task: String,
-    args: Vec<String>,
-    gtp: SolutionStream,
+    request: Request,
+    pos: usize,
 }
 
-/// One solution request's outcome: the solution if any, the statistics of that request, the
-/// stream's task and arguments, and why the stream ended when it did.
+/// One solution request's outcome: the solution if any, the statistics of that request, and
+/// why the stream ended when it did.
 struct Pulled {
     solution: Option<Solution>,
     delta: Stats,
-    task: String,
-    args: Vec<String>,
-    failure: Option<String>,
-    /// The stage (constraint) that stopped the stream, when it ended.
-    stage: Option<gtp::planner::Stage>,
+    end: End,
 }
 
 /// A geometric task that found no (further) solution.
@@ -168,6 +168,8 @@ pub struct GtpOracle {
     solutions: Vec<Given>,
     streams: HashMap<u64, Stream>,
     next_stream: u64,
+    /// Every request's solutions, read back when it is asked again (`stream_memo.rs`).
+    memo: StreamMemo,
     stats: HashMap<String, TaskStats>,
     /// Every solution request, in order.
     requests: Vec<RequestTime>,
@@ -198,6 +200,7 @@ impl GtpOracle {
             solutions: Vec::new(),
             streams: HashMap::new(),
             next_stream: 0,
+            memo: StreamMemo::default(),
             stats: HashMap::new(),
             requests: Vec::new(),
             last_failure: None,
@@ -258,6 +261,12 @@ impl GtpOracle {
         &self.requests
     }
 
+    /// Requests answered from the memo, without a GTP call: a solution given out before in
+    /// the same world, or the end of its stream (`stream_memo.rs`).
+    pub fn replays(&self) -> u64 {
+        self.memo.replays
+    }
+
     /// The symbolic shared literals of `world`.
     pub fn literals(&self, world: &World) -> BTreeSet<GroundAtom> {
         shared_literals(world, &self.config.facts)
@@ -279,10 +288,12 @@ impl GtpOracle {
         let facts = Arc::new(self.literals(&world));
         // Two worlds that differ in geometry only are told apart by the HTN search.
         let fingerprint = world.fingerprint(Precision::Millimetre);
+        let exact = world.fingerprint(Precision::Exact);
         Frame {
             world,
             facts,
             fingerprint,
+            exact,
         }
     }
 
@@ -309,22 +320,75 @@ impl GtpOracle {
             .map_err(|e| OracleError(format!("{task}({}): {e}", args.join(", "))))
     }
 
-    /// Pulls the next solution of a stream, with the statistics of that request.
-    fn pull(&mut self, id: u64) -> Result<Pulled, OracleError> {
-        let stream = self
-            .streams
-            .get_mut(&id)
-            .ok_or_else(|| OracleError(format!("unknown stream {id}")))?;
-        let before = stream.gtp.stats();
-        let solution = stream.gtp.next();
+    /// The GTP's stream of `request`, past the solutions the memo holds: the parked one, or
+    /// the request asked again from its start (its first solutions, given before, dropped).
+    fn live_stream(&mut self, request: &Request) -> Result<SolutionStream, OracleError> {
+        if let Some(s) = self.memo.unpark(request) {
+            return Ok(s);
+        }
+        let world = self.world().clone();
+        let mut s = self.run(&world, gtp_task(&request.task), &request.args)?;
+        for _ in 0..self.memo.given(request) {
+            s.next();
+        }
+        Ok(s)
+    }
+
+    /// Asks the GTP for the next solution of `request`, with the statistics of that request;
+    /// the memo records it.
+    fn pull(&mut self, request: &Request) -> Result<Pulled, OracleError> {
+        let mut gtp = self.live_stream(request)?;
+        let before = gtp.stats();
+        let solution = gtp.next();
+        let delta = gtp.stats().since(&before);
+        let end = End {
+            failure: gtp.failure().map(|f| f.to_string()),
+            stage: gtp.failure().map(|f| f.stage),
+        };
+        if solution.is_some() {
+            self.memo.park(request, gtp);
+        } else {
+            self.memo.end(request, end.clone());
+        }
         Ok(Pulled {
             solution,
-            delta: stream.gtp.stats().since(&before),
-            task: stream.task.clone(),
-            args: stream.args.clone(),
-            failure: stream.gtp.failure().map(|f| f.to_string()),
-            stage: stream.gtp.failure().map(|f| f.stage),
+            delta,
+            end,
         })
+    }
+
+    /// Records a request that found no (further) solution as the last failure.
+    fn note_failure(&mut self, request: &Request, end: End) {
+        let why = end.failure.unwrap_or_else(|| "no further solution".into());
+        let s = self.stats.entry(request.task.clone()).or_default();
+        s.last_failure = Some(why.clone());
+        self.last_failure = Some(TaskFailure {
+            task: request.task.clone(),
+            args: request.args.clone(),
+            why,
+            stage: end.stage,
+        });
+    }
+
+    /// The next solution of `request` as the memo gives it back, when it has it.
+    fn replay(&mut self, request: &Request, pos: usize) -> Option<Option<GeoSolution>> {
+        let known = match self.memo.known(request, pos) {
+            Known::Solution(s) => Some(s),
+            Known::End(end) => {
+                self.note_failure(request, end);
+                None
+            }
+            Known::Unknown => return None,
+        };
+        if self.config.trace {
+            eprintln!(
+                "[gtp] {}({}) -> {} (read back: asked before in this world)",
+                request.task,
+                request.args.join(", "),
+                if known.is_some() { "solution" } else { "none" },
+            );
+        }
+        Some(known)
     }
 }
 
@@ -347,87 +411,36 @@ impl GeometricOracle for GtpOracle {
     }
 
     fn open(&mut self, task: &str, args: &[String]) -> Result<StreamId, OracleError> {
-        let world = self.world().clone();
-        let stream = Stream {
+        let request = Request {
             task: task.to_string(),
             args: args.to_vec(),
-            gtp: self.run(&world, gtp_task(task), args)?,
+            world: self.stack[self.stack.len() - 1].exact,
         };
+        if !self.memo.contains(&request) {
+            let world = self.world().clone();
+            let gtp = self.run(&world, gtp_task(task), args)?;
+            self.memo.park(&request, gtp);
+        }
         let id = self.next_stream;
         self.next_stream += 1;
-        self.streams.insert(id, stream);
+        self.streams.insert(id, Stream { request, pos: 0 });
         Ok(StreamId(id))
     }
 
     fn next_solution(&mut self, stream: StreamId) -> Result<Option<GeoSolution>, OracleError> {
-        let Pulled {
-            solution,
-            delta,
-            task,
-            args,
-            failure,
-            stage,
-        } = self.pull(stream.0)?;
-        let t0 = Instant::now();
-        let result = match solution {
-            None => None,
-            Some(sol) => {
-                let frame = self.frame(sol.world);
-                let before = self.current_facts();
-                let add = frame.facts.difference(before).cloned().collect();
-                let delete = before.difference(&frame.facts).cloned().collect();
-                let id = SolutionId(self.solutions.len() as u64);
-                self.solutions.push(Given {
-                    frame,
-                    summary: sol.summary,
-                });
-                Some(GeoSolution { add, delete, id })
-            }
+        let (request, pos) = self
+            .streams
+            .get(&stream.0)
+            .map(|s| (s.request.clone(), s.pos))
+            .ok_or_else(|| OracleError(format!("unknown stream {}", stream.0)))?;
+        let result = match self.replay(&request, pos) {
+            Some(known) => known,
+            None => self.ask(&request)?,
         };
-        let facts_time_s = t0.elapsed().as_secs_f64();
-        self.requests.push(RequestTime {
-            task: task.clone(),
-            args: args.clone(),
-            solved: result.is_some(),
-            stage: stage
-                .filter(|_| result.is_none())
-                .map(|s| s.name().to_string()),
-            facts_time_s,
-            search: delta,
-        });
-        let s = self.stats.entry(task.clone()).or_default();
-        s.record(&delta, result.is_some(), facts_time_s);
-        if self.config.trace {
-            let lists = result
-                .as_ref()
-                .map(|r| {
-                    let show = |sign: char, atoms: &[GroundAtom]| -> String {
-                        atoms.iter().map(|a| format!(" {sign}{a}")).collect()
-                    };
-                    format!("{}{}", show('+', &r.add), show('-', &r.delete))
-                })
-                .unwrap_or_default();
-            eprintln!(
-                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}{lists}",
-                args.join(", "),
-                if result.is_some() { "solution" } else { "none" },
-                delta.time_s * 1e3,
-                t0.elapsed().as_secs_f64() * 1e3,
-                failure
-                    .as_ref()
-                    .map(|f| format!(": {f}"))
-                    .unwrap_or_default()
-            );
-        }
-        if result.is_none() {
-            let why = failure.unwrap_or_else(|| "no further solution".into());
-            s.last_failure = Some(why.clone());
-            self.last_failure = Some(TaskFailure {
-                task,
-                args,
-                why,
-                stage,
-            });
+        if result.is_some()
+            && let Some(s) = self.streams.get_mut(&stream.0)
+        {
+            s.pos += 1;
         }
         Ok(result)
     }
@@ -457,5 +470,76 @@ impl GeometricOracle for GtpOracle {
 
     fn world_fingerprint(&self) -> u64 {
         self.stack[self.stack.len() - 1].fingerprint
+    }
+}
+
+impl GtpOracle {
+    /// Asks the GTP for the next solution of `request`: the solution with its add and delete
+    /// lists, timed and traced, or `None` with the reason recorded as the last failure.
+    fn ask(&mut self, request: &Request) -> Result<Option<GeoSolution>, OracleError> {
+        let Pulled {
+            solution,
+            delta,
+            end,
+        } = self.pull(request)?;
+        let (task, args) = (request.task.clone(), request.args.clone());
+        let t0 = Instant::now();
+        let result = match solution {
+            None => None,
+            Some(sol) => {
+                let frame = self.frame(sol.world);
+                let before = self.current_facts();
+                let add = frame.facts.difference(before).cloned().collect();
+                let delete = before.difference(&frame.facts).cloned().collect();
+                let id = SolutionId(self.solutions.len() as u64);
+                self.solutions.push(Given {
+                    frame,
+                    summary: sol.summary,
+                });
+                let given = GeoSolution { add, delete, id };
+                self.memo.push(request, given.clone());
+                Some(given)
+            }
+        };
+        let facts_time_s = t0.elapsed().as_secs_f64();
+        self.requests.push(RequestTime {
+            task: task.clone(),
+            args: args.clone(),
+            solved: result.is_some(),
+            stage: end
+                .stage
+                .filter(|_| result.is_none())
+                .map(|s| s.name().to_string()),
+            facts_time_s,
+            search: delta,
+        });
+        let s = self.stats.entry(task.clone()).or_default();
+        s.record(&delta, result.is_some(), facts_time_s);
+        if self.config.trace {
+            let lists = result
+                .as_ref()
+                .map(|r| {
+                    let show = |sign: char, atoms: &[GroundAtom]| -> String {
+                        atoms.iter().map(|a| format!(" {sign}{a}")).collect()
+                    };
+                    format!("{}{}", show('+', &r.add), show('-', &r.delete))
+                })
+                .unwrap_or_default();
+            eprintln!(
+                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}{lists}",
+                args.join(", "),
+                if result.is_some() { "solution" } else { "none" },
+                delta.time_s * 1e3,
+                t0.elapsed().as_secs_f64() * 1e3,
+                end.failure
+                    .as_ref()
+                    .map(|f| format!(": {f}"))
+                    .unwrap_or_default()
+            );
+        }
+        if result.is_none() {
+            self.note_failure(request, end);
+        }
+        Ok(result)
     }
 }
