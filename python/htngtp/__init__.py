@@ -502,8 +502,8 @@ def plan(
     the validator.
 
     ``strategy``: ``"symbolic"`` (one geometric solution per task), ``"chronological"`` (every
-    choice point, latest first, in rounds that let more and more geometric tasks take another
-    solution), ``"plain-chronological"`` (the same in one search, every solution of the latest
+    choice point, latest first, in rounds that allow more and more revisions of geometric
+    solutions that later ones built on), ``"plain-chronological"`` (the same in one search, every solution of the latest
     geometric task first) or ``"geometric-first"`` (on a geometric failure, ``geo_k`` other
     solutions of earlier geometric tasks first, the paper's Fig. 3). The search is
     deterministic for a ``seed``. ``time_limit`` (s) and ``memory_limit`` (MiB of the

@@ -132,9 +132,9 @@ fn share(s: &str) -> Result<f64, String> {
 pub enum StrategyArg {
     /// Each geometric task gives at most one solution; only HTN choices are revisited.
     Symbolic,
-    /// Every choice point, latest first, in rounds that allow more and more geometric tasks
-    /// off their first solution (0, 1, 2, ...: limited discrepancy); as complete as
-    /// plain-chronological.
+    /// Every choice point, latest first, in rounds that allow more and more revisions of
+    /// geometric solutions later ones built on (0, 1, 2, ...: limited discrepancy); as
+    /// complete as plain-chronological.
     Chronological,
     /// Every choice point, latest first, in one search: every solution of the latest
     /// geometric task before an earlier one is revisited (the paper's interleaved

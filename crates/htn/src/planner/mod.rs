@@ -42,14 +42,16 @@
 //!   `goal_on` markers).
 //!
 //! Chronological backtracking goes in rounds of limited discrepancy over geometric solutions
-//! (`search/driver.rs`; Harvey and Ginsberg's LDS): round 0 takes every geometric task's first
-//! solution and revisits HTN choices only (the symbolic strategy's search), round `r` lets at
-//! most `r` geometric tasks of a path take another solution, each among its first `2^r + 1`.
-//! A round that cut no solution off was the plain chronological search, so its failure proves
-//! that no plan exists. Plain chronological backtracking (`discrepancy_rounds` off) goes
-//! through every solution of the latest geometric task, times every solution of the ones
-//! between, before it revisits an earlier one: in random rooms, thousands of placements of the
-//! POS machine before the HTN alternative that works.
+//! (`search/driver.rs`; after Harvey and Ginsberg's LDS). A geometric task's next solution is
+//! a *local retry* when no geometric task after it took a solution since its current one (the
+//! task after it failed at once): always allowed. Otherwise it *revises* a choice that later
+//! geometric tasks built on: round `r` allows revisions at no more than `r` geometric tasks of
+//! a path, each at most `2^r` times. Round 0 is the symbolic strategy's search plus local
+//! retries. A round that cut no revision off was the plain chronological search, so its
+//! failure proves that no plan exists. Plain chronological backtracking (`discrepancy_rounds`
+//! off) revises the latest geometric task through all its solutions, times every solution of
+//! the ones between, before it revisits an earlier choice or an HTN alternative: in random
+//! rooms, thousands of placements of the POS machine before the HTN alternative that works.
 //!
 //! Geometric-first's chronological pass (`search/driver.rs`): with geometric tasks, the
 //! repairs get the first `1 - chronological_share` of the time limit (all of it without one);
@@ -85,7 +87,7 @@ pub enum Strategy {
     /// (the paper's experiment).
     Symbolic,
     /// Every choice point, latest first (interleaved backtracking), in rounds of limited
-    /// discrepancy over the geometric solutions (see [`PlannerOptions::discrepancy_rounds`]).
+    /// discrepancy over geometric revisions (see [`PlannerOptions::discrepancy_rounds`]).
     #[default]
     Chronological,
     /// On a geometric failure (a GS action with no solution, or a task none of whose methods
@@ -162,11 +164,11 @@ pub struct PlannerOptions {
     #[serde(default = "default_chronological_share")]
     pub chronological_share: f64,
     /// Chronological backtracking over geometric solutions in rounds of limited discrepancy
-    /// (`search/driver.rs`): round `r` takes a solution other than the first at no more than
-    /// `r` geometric tasks of a path, and only among each task's first `2^r + 1`; a round that
-    /// cut nothing off is the plain chronological search, so the rounds are as complete. Off:
-    /// one plain chronological search, which goes through every solution of the latest
-    /// geometric task before it revisits an earlier one.
+    /// (see the module docs): round `r` lets at most `r` geometric tasks of a path revise a
+    /// solution that later geometric tasks built on, each at most `2^r` times (a retry after a
+    /// task that failed at once is always allowed); a round that cut nothing off is the plain
+    /// chronological search, so the rounds are as complete. Off: one plain chronological
+    /// search.
     #[serde(default = "default_true")]
     pub discrepancy_rounds: bool,
 }
@@ -246,8 +248,8 @@ pub struct SearchStats {
     /// Geometric-first's repairs were spent without a plan and a chronological pass followed.
     #[serde(default)]
     pub chronological_after_repairs: bool,
-    /// The last round of limited discrepancy the chronological search ran (0: only first
-    /// geometric solutions; see [`PlannerOptions::discrepancy_rounds`]).
+    /// The last round of limited discrepancy the chronological search ran (0: no geometric
+    /// revisions, local retries only; see [`PlannerOptions::discrepancy_rounds`]).
     #[serde(default)]
     pub discrepancy_round: u32,
     /// Whether the best-first fallback search ran, and the nodes it expanded (counted in

@@ -235,15 +235,20 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
                 loop {
                     let idx = self.geo_frames[g].current + 1;
-                    if !self.within_discrepancy(idx) {
-                        self.discrepancy_cut = true;
-                        return Ok(false);
+                    if self.geo_frames[g].deep {
+                        let revisions = self.geo_frames[g].revisions + 1;
+                        if !self.within_discrepancy(revisions) {
+                            self.discrepancy_cut = true;
+                            return Ok(false);
+                        }
+                        self.geo_frames[g].revisions = revisions;
                     }
                     if !self.fetch(g, idx)? {
                         return Ok(false);
                     }
                     self.stats.geo_backtracks += 1;
                     self.geo_frames[g].current = idx;
+                    self.geo_frames[g].deep = false;
                     if self.apply_geo(g)? {
                         return Ok(true);
                     }
@@ -252,17 +257,17 @@ impl<'a, 'o> Search<'a, 'o> {
         }
     }
 
-    /// Whether the current round of limited discrepancy lets the top geometric frame take
-    /// its solution `idx` (> 0): at most `r` frames of the path off their first solution in
-    /// round `r`, each among its first `2^r + 1`.
-    fn within_discrepancy(&self, idx: usize) -> bool {
+    /// Whether the current round of limited discrepancy lets the top geometric frame revise
+    /// its solution for the `revisions`-th time (see `GeoFrame::deep`): in round `r`, at most
+    /// `r` frames of the path revised, each at most `2^r` times.
+    fn within_discrepancy(&self, revisions: u32) -> bool {
         let Some(r) = self.discrepancy else {
             return true;
         };
-        // The top frame itself is the one about to leave its first solution, or off it.
+        // The top frame itself is the one about to be revised (again).
         let others = self.geo_frames.iter().rev().skip(1);
-        let off = others.filter(|f| f.current > 0).count();
-        off < r as usize && idx <= 1usize << r.min(30)
+        let revised = others.filter(|f| f.revisions > 0).count();
+        revised < r as usize && revisions <= 1u32 << r.min(30)
     }
 
     /// Takes the next method-and-binding choice of HTN frame `h` (the top frame, restored):

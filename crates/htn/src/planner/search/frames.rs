@@ -89,6 +89,12 @@ pub(super) struct GeoFrame {
     pub(super) current: usize,
     pub(super) applied: bool,
     pub(super) exhausted: bool,
+    /// Whether a geometric solution was taken above this frame since its current one: its
+    /// next solution then revises a choice that later geometric tasks built on (a
+    /// discrepancy, counted in `revisions`); otherwise the task after it failed at once and
+    /// the next solution is a local retry, free in every round of limited discrepancy.
+    pub(super) deep: bool,
+    pub(super) revisions: u32,
 }
 
 /// The id of a frame in a [`ChoiceStack`]; valid while the frame is on the stack.
@@ -138,6 +144,12 @@ impl<T> ChoiceStack<T> {
     /// The frames, oldest first.
     pub(super) fn iter(&self) -> std::slice::Iter<'_, T> {
         self.0.iter()
+    }
+
+    /// The frame below `id`, if any.
+    pub(super) fn below_mut(&mut self, id: ChoiceId<T>) -> Option<&mut T> {
+        let i = id.0.checked_sub(1)?;
+        self.0.get_mut(i)
     }
 }
 

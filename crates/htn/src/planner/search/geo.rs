@@ -58,6 +58,8 @@ impl<'a, 'o> Search<'a, 'o> {
             current: 0,
             applied: false,
             exhausted: false,
+            deep: false,
+            revisions: 0,
         });
         let replaying = self.mode != Mode::Normal && !self.forced.is_empty();
         let want = if replaying {
@@ -117,9 +119,9 @@ impl<'a, 'o> Search<'a, 'o> {
     }
 
     /// Takes the current solution of geo frame `g` (the top frame, restored).
-    pub(super) fn apply_geo(&mut self, g: GeoId) -> Result<bool, PlanError> {
+    pub(super) fn apply_geo(&mut self, id: GeoId) -> Result<bool, PlanError> {
         let c = self.c;
-        let g = &mut self.geo_frames[g];
+        let g = &mut self.geo_frames[id];
         let act = &c.actions[g.action as usize];
         let ev = Eval {
             c,
@@ -169,6 +171,10 @@ impl<'a, 'o> Search<'a, 'o> {
             geo: Some(geo),
         });
         self.top = g.rest;
+        // The geometric task before this one now has a solution built on it.
+        if let Some(below) = self.geo_frames.below_mut(id) {
+            below.deep = true;
+        }
         Ok(true)
     }
 }
