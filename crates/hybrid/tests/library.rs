@@ -477,3 +477,46 @@ fn fig4_is_solved_by_geometric_backtracking_alone() {
     assert_eq!(backtracks(&s).1, 0);
     assert!(methods(&s).contains(&"m4".to_string()));
 }
+
+/// A request asked again in the same world (a search that starts over: the next round of
+/// limited discrepancy, a deeper bound) is answered from the memo: the same solutions, in the
+/// same order, with no GTP call; in another world it is asked of the GTP.
+#[test]
+fn a_request_asked_again_in_the_same_world_is_read_back() {
+    let world = geometry::world::World::load(library().join("scene.toml")).unwrap();
+    let names = [
+        "member",
+        "grey-book",
+        "white-book",
+        "pos-machine",
+        "pr2",
+        "desk",
+    ];
+    let mut o = hybrid::GtpOracle::new(
+        std::sync::Arc::new(gtp::planner::Planner::new()),
+        world,
+        names.iter().map(|n| n.to_string()),
+        hybrid::OracleConfig::default(),
+    );
+    let args = ["grey-book".to_string(), "member".to_string()];
+    let mut ask = |o: &mut hybrid::GtpOracle, n: usize| {
+        let s = o.open("pick-and-make-accessible", &args).unwrap();
+        let ids: Vec<_> = (0..n)
+            .map(|_| o.next_solution(s).unwrap().expect("a solution").id)
+            .collect();
+        o.close(s);
+        ids
+    };
+    let first = ask(&mut o, 2);
+    let calls = o.requests().len();
+    assert_eq!(calls, 2);
+    // Again, one solution further: two read back, the third asked of the GTP.
+    let again = ask(&mut o, 3);
+    assert_eq!(again[..2], first[..]);
+    assert_eq!((o.requests().len(), o.replays()), (calls + 1, 2));
+    // In the world after the first solution, the same task is another request.
+    o.apply(first[0]).unwrap();
+    let after = ask(&mut o, 1);
+    assert!(!first.contains(&after[0]));
+    assert_eq!((o.requests().len(), o.replays()), (calls + 2, 2));
+}
