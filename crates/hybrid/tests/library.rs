@@ -499,7 +499,7 @@ fn a_request_asked_again_in_the_same_world_is_read_back() {
         hybrid::OracleConfig::default(),
     );
     let args = ["grey-book".to_string(), "member".to_string()];
-    let mut ask = |o: &mut hybrid::GtpOracle, n: usize| {
+    let ask = |o: &mut hybrid::GtpOracle, n: usize| {
         let s = o.open("pick-and-make-accessible", &args).unwrap();
         let ids: Vec<_> = (0..n)
             .map(|_| o.next_solution(s).unwrap().expect("a solution").id)
