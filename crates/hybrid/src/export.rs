@@ -308,6 +308,8 @@ pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptio
             "nodes": run.result.stats.nodes,
             "htn_backtracks": run.result.stats.htn_backtracks,
             "gtp_backtracks": run.result.stats.geo_backtracks,
+            "discrepancy_round": run.result.stats.discrepancy_round,
+            "gtp_replays": run.oracle.replays(),
             "time_ms": run.result.stats.time_s * 1e3,
             "gtp_tasks": run.oracle.task_stats(),
         },
