@@ -390,6 +390,75 @@ impl GtpOracle {
         }
         Some(known)
     }
+
+    /// Asks the GTP for the next solution of `request`: the solution with its add and delete
+    /// lists, timed and traced, or `None` with the reason recorded as the last failure.
+    fn ask(&mut self, request: &Request) -> Result<Option<GeoSolution>, OracleError> {
+        let Pulled {
+            solution,
+            delta,
+            end,
+        } = self.pull(request)?;
+        let (task, args) = (request.task.clone(), request.args.clone());
+        let t0 = Instant::now();
+        let result = match solution {
+            None => None,
+            Some(sol) => {
+                let frame = self.frame(sol.world);
+                let before = self.current_facts();
+                let add = frame.facts.difference(before).cloned().collect();
+                let delete = before.difference(&frame.facts).cloned().collect();
+                let id = SolutionId(self.solutions.len() as u64);
+                self.solutions.push(Given {
+                    frame,
+                    summary: sol.summary,
+                });
+                let given = GeoSolution { add, delete, id };
+                self.memo.push(request, given.clone());
+                Some(given)
+            }
+        };
+        let facts_time_s = t0.elapsed().as_secs_f64();
+        self.requests.push(RequestTime {
+            task: task.clone(),
+            args: args.clone(),
+            solved: result.is_some(),
+            stage: end
+                .stage
+                .filter(|_| result.is_none())
+                .map(|s| s.name().to_string()),
+            facts_time_s,
+            search: delta,
+        });
+        let s = self.stats.entry(task.clone()).or_default();
+        s.record(&delta, result.is_some(), facts_time_s);
+        if self.config.trace {
+            let lists = result
+                .as_ref()
+                .map(|r| {
+                    let show = |sign: char, atoms: &[GroundAtom]| -> String {
+                        atoms.iter().map(|a| format!(" {sign}{a}")).collect()
+                    };
+                    format!("{}{}", show('+', &r.add), show('-', &r.delete))
+                })
+                .unwrap_or_default();
+            eprintln!(
+                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}{lists}",
+                args.join(", "),
+                if result.is_some() { "solution" } else { "none" },
+                delta.time_s * 1e3,
+                t0.elapsed().as_secs_f64() * 1e3,
+                end.failure
+                    .as_ref()
+                    .map(|f| format!(": {f}"))
+                    .unwrap_or_default()
+            );
+        }
+        if result.is_none() {
+            self.note_failure(request, end);
+        }
+        Ok(result)
+    }
 }
 
 /// The GTP task that answers a compound task of the paper (PICK grouped with the GTP task after
@@ -470,76 +539,5 @@ impl GeometricOracle for GtpOracle {
 
     fn world_fingerprint(&self) -> u64 {
         self.stack[self.stack.len() - 1].fingerprint
-    }
-}
-
-impl GtpOracle {
-    /// Asks the GTP for the next solution of `request`: the solution with its add and delete
-    /// lists, timed and traced, or `None` with the reason recorded as the last failure.
-    fn ask(&mut self, request: &Request) -> Result<Option<GeoSolution>, OracleError> {
-        let Pulled {
-            solution,
-            delta,
-            end,
-        } = self.pull(request)?;
-        let (task, args) = (request.task.clone(), request.args.clone());
-        let t0 = Instant::now();
-        let result = match solution {
-            None => None,
-            Some(sol) => {
-                let frame = self.frame(sol.world);
-                let before = self.current_facts();
-                let add = frame.facts.difference(before).cloned().collect();
-                let delete = before.difference(&frame.facts).cloned().collect();
-                let id = SolutionId(self.solutions.len() as u64);
-                self.solutions.push(Given {
-                    frame,
-                    summary: sol.summary,
-                });
-                let given = GeoSolution { add, delete, id };
-                self.memo.push(request, given.clone());
-                Some(given)
-            }
-        };
-        let facts_time_s = t0.elapsed().as_secs_f64();
-        self.requests.push(RequestTime {
-            task: task.clone(),
-            args: args.clone(),
-            solved: result.is_some(),
-            stage: end
-                .stage
-                .filter(|_| result.is_none())
-                .map(|s| s.name().to_string()),
-            facts_time_s,
-            search: delta,
-        });
-        let s = self.stats.entry(task.clone()).or_default();
-        s.record(&delta, result.is_some(), facts_time_s);
-        if self.config.trace {
-            let lists = result
-                .as_ref()
-                .map(|r| {
-                    let show = |sign: char, atoms: &[GroundAtom]| -> String {
-                        atoms.iter().map(|a| format!(" {sign}{a}")).collect()
-                    };
-                    format!("{}{}", show('+', &r.add), show('-', &r.delete))
-                })
-                .unwrap_or_default();
-            eprintln!(
-                "[gtp] {task}({}) -> {} in {:.1} ms (+{:.1} ms facts){}{lists}",
-                args.join(", "),
-                if result.is_some() { "solution" } else { "none" },
-                delta.time_s * 1e3,
-                t0.elapsed().as_secs_f64() * 1e3,
-                end.failure
-                    .as_ref()
-                    .map(|f| format!(": {f}"))
-                    .unwrap_or_default()
-            );
-        }
-        if result.is_none() {
-            self.note_failure(request, end);
-        }
-        Ok(result)
     }
 }

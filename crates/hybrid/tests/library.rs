@@ -52,6 +52,25 @@ fn run_with(
     .unwrap_or_else(|e| panic!("{problem}: {e}"))
 }
 
+/// An oracle over `world` that knows the library problems' names.
+fn library_oracle(world: geometry::world::World) -> hybrid::GtpOracle {
+    let names = [
+        "member",
+        "grey-book",
+        "white-book",
+        "pos-machine",
+        "pr2",
+        "desk",
+        "pos-stand",
+    ];
+    hybrid::GtpOracle::new(
+        std::sync::Arc::new(gtp::planner::Planner::new()),
+        world,
+        names.iter().map(|n| n.to_string()),
+        hybrid::OracleConfig::default(),
+    )
+}
+
 fn plan(run: &Run) -> &htn::plan::Plan {
     match &run.result.outcome {
         Outcome::Found { plan } => plan,
@@ -428,21 +447,7 @@ fn fig4_is_solved_by_geometric_backtracking_alone() {
         .solution_world(grey.geometric.as_ref().unwrap().solution)
         .unwrap()
         .clone();
-    let names = [
-        "member",
-        "grey-book",
-        "white-book",
-        "pos-machine",
-        "pr2",
-        "desk",
-        "pos-stand",
-    ];
-    let mut o = hybrid::GtpOracle::new(
-        std::sync::Arc::new(gtp::planner::Planner::new()),
-        after_grey,
-        names.iter().map(|n| n.to_string()),
-        hybrid::OracleConfig::default(),
-    );
+    let mut o = library_oracle(after_grey);
     let stream = o
         .open(
             "pick-and-make-accessible",
@@ -484,20 +489,7 @@ fn fig4_is_solved_by_geometric_backtracking_alone() {
 #[test]
 fn a_request_asked_again_in_the_same_world_is_read_back() {
     let world = geometry::world::World::load(library().join("scene.toml")).unwrap();
-    let names = [
-        "member",
-        "grey-book",
-        "white-book",
-        "pos-machine",
-        "pr2",
-        "desk",
-    ];
-    let mut o = hybrid::GtpOracle::new(
-        std::sync::Arc::new(gtp::planner::Planner::new()),
-        world,
-        names.iter().map(|n| n.to_string()),
-        hybrid::OracleConfig::default(),
-    );
+    let mut o = library_oracle(world);
     let args = ["grey-book".to_string(), "member".to_string()];
     let ask = |o: &mut hybrid::GtpOracle, n: usize| {
         let s = o.open("pick-and-make-accessible", &args).unwrap();
