@@ -3,9 +3,9 @@
 //! The original planner rendered the target alone (the *ideal* pixel count), then the whole scene
 //! from the same eye, and counted the target's pixels still showing: visibility = shown / ideal.
 //! Here the "pixels" are a `resolution` x `resolution` grid of rays spread over the target's
-//! projected bounding rectangle, seen from the eye with the camera aimed at the target, so every
-//! query spends its rays on the target whatever its distance (equal steps in the image plane,
-//! like pixels of a zoomed-in render). A ray counts as:
+//! projected bounding rectangle in the eye's image plane, so every query spends its rays on the
+//! target whatever its distance (equal steps in the image plane, like pixels of a zoomed-in
+//! render of the eye's camera). A ray counts as:
 //!
 //! * *ideal* when it hits the target alone;
 //! * *shown* when, in addition, its direction lies inside the agent's field of view (measured
@@ -93,28 +93,41 @@ pub fn visibility_from_upto(
     let tpose = world.object_shape_pose(target);
     let e = eye.translation;
 
-    // Aim a camera at the centre of the target's world bounds; project the corners of its
-    // oriented local box to bound the rays.
+    // The rays: equal steps over the target's bounding rectangle in the eye's own image plane,
+    // as pixels of the eye's camera (and the checkers' rays); a camera aimed at the centre of
+    // the target's bounds when the target reaches beyond 80 degrees of the eye's axis (it is
+    // then mostly out of any field of view, and the eye's plane would stretch without bound).
     let taabb = obj.shape.compute_aabb(&tpose);
     let centre = taabb.center();
-    let rot = look_rotation(centre - e);
     let lb = obj.shape.compute_local_aabb();
-    let (mut a0, mut a1, mut b0, mut b1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
-    for k in 0..8 {
-        let c = Vector::new(
+    let corners: [Vector; 8] = std::array::from_fn(|k| {
+        tpose.transform_point(Vector::new(
             if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
             if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
             if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
-        );
-        let l = rot.inverse() * (tpose.transform_point(c) - e);
-        // A corner at or behind the eye: the eye is (nearly) inside the target's bounds.
-        let x = l.x.max(1e-3);
-        let (a, b) = ((l.y / x).clamp(-6.0, 6.0), (l.z / x).clamp(-6.0, 6.0));
-        a0 = a0.min(a);
-        a1 = a1.max(a);
-        b0 = b0.min(b);
-        b1 = b1.max(b);
-    }
+        ))
+    });
+    let rectangle = |rot: parry3d::math::Rotation| {
+        let mut r = [f32::MAX, f32::MIN, f32::MAX, f32::MIN];
+        let mut inside = true;
+        for c in corners {
+            let l = rot.inverse() * (c - e);
+            // A corner at or behind the eye: the eye is (nearly) inside the target's bounds.
+            let x = l.x.max(1e-3);
+            let (a, b) = (l.y / x, l.z / x);
+            inside &= l.x > 1e-3 && a.abs() <= 6.0 && b.abs() <= 6.0;
+            let (a, b) = (a.clamp(-6.0, 6.0), b.clamp(-6.0, 6.0));
+            r = [r[0].min(a), r[1].max(a), r[2].min(b), r[3].max(b)];
+        }
+        (r, inside)
+    };
+    let (rot, [a0, a1, b0, b1]) = match rectangle(eye.rotation) {
+        (r, true) => (eye.rotation, r),
+        _ => {
+            let rot = look_rotation(centre - e);
+            (rot, rectangle(rot).0)
+        }
+    };
 
     // Possible occluders: bodies whose bounds meet the region spanned by the eye and the
     // target, except the target itself and any body the eye is inside of. A compound body
@@ -137,11 +150,11 @@ pub fn visibility_from_upto(
         Ray::new(e, dir)
     };
     let near_target = (e - e.clamp(taabb.mins, taabb.maxs)).length();
-    let corners = [(a0, b0), (a1, b0), (a0, b1), (a1, b1)].map(|(a, b)| ray_at(a, b));
+    let corner_rays = [(a0, b0), (a1, b0), (a0, b1), (a1, b1)].map(|(a, b)| ray_at(a, b));
     let hidden = near_target > 0.0
         && occluders.iter().any(|o| {
             o.shape.is_convex()
-                && corners.iter().all(|r| {
+                && corner_rays.iter().all(|r| {
                     o.first_hit(r)
                         .is_some_and(|t| t * r.dir.length() < near_target)
                 })

@@ -88,6 +88,25 @@ fn object_across_the_edge_of_the_view_is_partly_visible() {
 }
 
 #[test]
+fn pixels_are_equal_steps_in_the_eyes_image_plane() {
+    // A panel facing the eye, from straight ahead to 51 degrees to the side (its near face at
+    // x = 1.95, y from 0 to 2.38); the field of view reaches 35 degrees, u = tan 35 = 0.70 in
+    // the eye's image plane, of the panel's 0 to 2.38 / 1.95 = 1.22: 0.574 of its pixels.
+    // (Rays in a camera aimed at the panel's centre would weigh its near part more: 0.69.)
+    let w = world(
+        "[[objects]]\nname = \"panel\"\nshape = { box = [0.05, 1.19, 0.2] }\npose = { xyz = [2.0, 1.19, 1.0] }\n",
+    );
+    let t = w.object_id("panel").unwrap();
+    let eye = eye_looking(Vector::new(0.0, 0.0, 1.0), Vector::new(2.0, 0.0, 1.0));
+    let v = visibility_from(&w, t, &eye, [70f32.to_radians(), 50f32.to_radians()], 64);
+    let expected = 35f32.to_radians().tan() / (2.38 / 1.95);
+    assert!(
+        (v.fraction() - expected).abs() < 0.03,
+        "{v:?}, expected {expected}"
+    );
+}
+
+#[test]
 fn agents_see_what_is_in_front_of_them() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let w = World::load(root.join("domains/library/scene.toml")).unwrap();
@@ -190,23 +209,36 @@ fn reference(
     let tpose = w.object_shape_pose(target);
     let e = eye.translation;
     let taabb = obj.shape.compute_aabb(&tpose);
-    let rot = look_rotation(taabb.center() - e);
     let lb = obj.shape.compute_local_aabb();
-    let (mut a0, mut a1, mut b0, mut b1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
-    for k in 0..8 {
-        let c = Vector::new(
-            if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
-            if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
-            if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
-        );
-        let l = rot.inverse() * (tpose.transform_point(c) - e);
-        let x = l.x.max(1e-3);
-        let (a, b) = ((l.y / x).clamp(-6.0, 6.0), (l.z / x).clamp(-6.0, 6.0));
-        a0 = a0.min(a);
-        a1 = a1.max(a);
-        b0 = b0.min(b);
-        b1 = b1.max(b);
-    }
+    // The eye's image plane when every corner lies within 80 degrees in front of the eye, else a
+    // camera aimed at the target's centre.
+    let rectangle = |rot: parry3d::math::Rotation| {
+        let (mut a0, mut a1, mut b0, mut b1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+        let mut inside = true;
+        for k in 0..8 {
+            let c = Vector::new(
+                if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
+                if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
+                if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
+            );
+            let l = rot.inverse() * (tpose.transform_point(c) - e);
+            let x = l.x.max(1e-3);
+            inside &= l.x > 1e-3 && (l.y / x).abs() <= 6.0 && (l.z / x).abs() <= 6.0;
+            let (a, b) = ((l.y / x).clamp(-6.0, 6.0), (l.z / x).clamp(-6.0, 6.0));
+            a0 = a0.min(a);
+            a1 = a1.max(a);
+            b0 = b0.min(b);
+            b1 = b1.max(b);
+        }
+        ((a0, a1, b0, b1), inside)
+    };
+    let (rot, (a0, a1, b0, b1)) = match rectangle(eye.rotation) {
+        (r, true) => (eye.rotation, r),
+        _ => {
+            let rot = look_rotation(taabb.center() - e);
+            (rot, rectangle(rot).0)
+        }
+    };
     let mut region = taabb;
     region.take_point(e);
     let bodies = w.bodies();
