@@ -74,7 +74,7 @@ pub fn plan_take(
     if let Some(c) = carry.collision(&goal) {
         return Err(format!("holding the object at the hand-over collides: {c}"));
     }
-    let withdraw = withdraw(&carry, &goal, rrt, rng);
+    let withdraw = withdraw(&carry, after, &goal, rrt, rng);
     let q_end = carry.full(withdraw.waypoints.last().unwrap_or(&goal));
     Ok(TakeMotion {
         arm,
@@ -211,6 +211,10 @@ fn reach_goal(
         if hand_depth(m, &q, world, object) > 0.0 {
             continue;
         }
+        if covers_eyes(m, world, &q) {
+            last = COVERS_EYES.to_string();
+            continue;
+        }
         match m.collision(&q) {
             None => return Ok(q),
             Some(c) => last = c,
@@ -232,6 +236,10 @@ fn reach_goal(
             q = s;
             let depth = hand_depth(m, &q, world, object);
             if depth == 0.0 && off > 0.0 {
+                if covers_eyes(m, world, &q) {
+                    last = COVERS_EYES.to_string();
+                    break;
+                }
                 match m.collision(&q) {
                     None => return Ok(q),
                     Some(c) => last = c,
@@ -242,6 +250,36 @@ fn reach_goal(
         }
     }
     Err(last)
+}
+
+/// How far a person keeps their arm from their eyes where a take ends (metres): nearer, the
+/// hand or forearm would cover the eyes and hide what the person looks at (and no one takes a
+/// book with the wrist at their face).
+const EYE_CLEARANCE: f32 = 0.12;
+const COVERS_EYES: &str = "the hand or forearm would cover the person's eyes";
+
+/// Whether a shape of the arm (its chain's links and the hand's) comes within
+/// [`EYE_CLEARANCE`] of the person's eye at arm values `qa`.
+fn covers_eyes(m: &ArmMotion, world: &World, qa: &[f32]) -> bool {
+    let model = &m.setup.model;
+    let q = m.full(qa);
+    let eye_link = world.agent(m.setup.agent).eye_link;
+    let eye = model.link_pose_by_id(m.base, &q, eye_link).translation;
+    let mut links: Vec<usize> = m
+        .arm
+        .chain
+        .joints
+        .iter()
+        .map(|&j| model.joints()[j].child)
+        .collect();
+    links.extend(model.hand_links(m.arm.tool_link));
+    links.iter().any(|&l| {
+        let pose = model.link_pose_by_id(m.base, &q, l);
+        model.links()[l]
+            .collisions
+            .iter()
+            .any(|c| c.shape.distance_to_point(&(pose * c.local_pose), eye, true) < EYE_CLEARANCE)
+    })
 }
 
 /// Rounds of backing the hand off the object.
@@ -319,6 +357,7 @@ fn arm_motion_among<'s>(
 /// where they took it (a one-waypoint path).
 fn withdraw(
     carry: &ArmMotion,
+    world: &World,
     from: &[f32],
     rrt: &RrtParams,
     rng: &mut fastrand::Rng,
@@ -330,7 +369,7 @@ fn withdraw(
         let Some(q) = position_ik(carry, from, target, rng) else {
             continue;
         };
-        if !carry.free(&q) {
+        if !carry.free(&q) || covers_eyes(carry, world, &q) {
             continue;
         }
         if let Ok((path, _)) = carry.plan(from, &q, rrt, rng) {

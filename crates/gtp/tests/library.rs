@@ -636,6 +636,18 @@ fn the_member_takes_a_given_book_and_the_gripper_is_free_again() {
     let grasp: parry3d::math::Pose = withdraw.held.as_ref().unwrap().object_in_tool.into();
     let jump = (hand * grasp).translation - given.world.object_pose(book).translation;
     assert!(jump.length() < 1e-3, "the book jumps {} m", jump.length());
+    // The hands keep clear of the member's eyes where the reach and the withdraw end.
+    let eye_link = world.agent(member).eye_link;
+    for q in [&q_take, q_end] {
+        let eye = model.link_pose_by_id(base, q, eye_link).translation;
+        for &l in &world.agent(member).hand_links {
+            let pose = model.link_pose_by_id(base, q, l);
+            for c in &model.links()[l].collisions {
+                let d = c.shape.distance_to_point(&(pose * c.local_pose), eye, true);
+                assert!(d >= 0.12, "a hand {d} m from the member's eye");
+            }
+        }
+    }
     // The book is an obstacle in the member's hand now, and the gripper can pick again.
     let next = first(&planner, &taken.world, "pick", &["white-book"]);
     recheck(&planner, &taken.world, &next);
