@@ -9,7 +9,8 @@
 //! hold one for their own limits (the search's joins and expansions poll it too).
 
 use std::cell::Cell;
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::planner::{Limit, current_rss_kb};
@@ -65,7 +66,7 @@ impl Watch {
             return Some(l);
         }
         let now = Instant::now();
-        if self.deadline.is_some_and(|d| now >= d) {
+        if stopped() || self.deadline.is_some_and(|d| now >= d) {
             self.passed.set(Some(Limit::Time));
         } else if now >= self.next_memory_check.get() {
             self.next_memory_check.set(now + MEMORY_CHECK_EVERY);
@@ -110,6 +111,37 @@ impl Watch {
     pub fn memory_mb(&self) -> Option<u64> {
         self.cap_kb.map(|kb| kb >> 10)
     }
+}
+
+thread_local! {
+    static STOP: std::cell::RefCell<Option<Arc<AtomicBool>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// While alive, every [`Watch`] of this thread (and the heuristic's grounding) stops as at its
+/// deadline once `flag` is set: another engine of a portfolio has decided.
+pub struct StopOn(());
+
+impl StopOn {
+    /// Installs `flag` for this thread until the guard is dropped.
+    pub fn install(flag: Arc<AtomicBool>) -> StopOn {
+        STOP.with(|s| *s.borrow_mut() = Some(flag));
+        StopOn(())
+    }
+}
+
+impl Drop for StopOn {
+    fn drop(&mut self) {
+        STOP.with(|s| *s.borrow_mut() = None);
+    }
+}
+
+/// Whether this thread's portfolio flag ([`StopOn`]) is set.
+pub fn stopped() -> bool {
+    STOP.with(|s| {
+        s.borrow()
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    })
 }
 
 static BUDGET: Mutex<Option<Watch>> = Mutex::new(None);

@@ -86,9 +86,10 @@ pub struct Args {
     /// Turn off the pruning by guarded goal achievers (for experiments).
     #[arg(long, hide = true)]
     pub no_goal_guards: bool,
-    /// With --time-limit, on problems without geometric tasks: the share of the time left to
-    /// the best-first fallback search once the depth-first search has used the rest without a
-    /// plan (0 turns the fallback off, 1 starts with it).
+    /// With --time-limit, on problems without geometric tasks: the share of the time during
+    /// which a best-first search runs beside the depth-first one, on a second thread, once the
+    /// depth-first search has used the rest without deciding; the first to find a plan or
+    /// prove there is none ends both (0 turns it off, 1 starts both at once).
     #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
     pub best_first_share: f64,
     /// With --strategy geometric-first and --time-limit, on problems with geometric tasks: the

@@ -58,10 +58,11 @@
 //! when that is used, or the search ends with geometric solutions untried, it starts again
 //! with chronological backtracking, which tries every solution.
 //!
-//! Fallback (`search/driver.rs`): with a time limit, on a purely symbolic problem, the
-//! depth-first search gets the first `1 - best_first_share` of the time; if it has found no
-//! plan by then, a weighted best-first progression search (`search/bfs.rs`, as pandaPI's)
-//! takes the rest: a quarter of it with the state-free estimate, then, when the relaxed
+//! Portfolio (`search/portfolio.rs`): with a time limit, on a purely symbolic problem, the
+//! depth-first search runs alone for the first `1 - best_first_share` of the time; if it has
+//! found no plan by then, a weighted best-first progression search (`search/bfs.rs`, as
+//! pandaPI's) starts beside it on a second thread, and the first of the two to decide ends
+//! both. The best-first search spends a quarter of its time with the state-free estimate, then, when the relaxed
 //! composition was ground, the rest with h_add over it (fast estimates solve Transport's
 //! road networks, h_add AssemblyHierarchical). It finds the
 //! plans of learned domains (Freecell) that amount to a blind state-space search, where the
@@ -152,9 +153,9 @@ pub struct PlannerOptions {
     /// can no longer change (`search/guard.rs`). Off only for experiments.
     #[serde(default = "default_true")]
     pub goal_guards: bool,
-    /// The share of the time limit left to the best-first fallback search (see the module
-    /// docs): the depth-first search hands over when it has used the rest without finding a
-    /// plan. 0 turns the fallback off; without a time limit there is none.
+    /// The share of the time limit the best-first search runs beside the depth-first one (see
+    /// the module docs): it starts when the depth-first search has used the rest without
+    /// deciding. 0 turns it off; without a time limit there is none.
     #[serde(default = "default_best_first_share")]
     pub best_first_share: f64,
     /// With [`Strategy::GeometricFirst`] and a time limit, on a problem with geometric tasks:
@@ -336,9 +337,12 @@ pub fn plan<'o>(
             task: compiled.geo_tasks[g as usize].clone(),
         });
     }
-    let mut result = search::Search::new(&compiled, options, oracle)?
-        .started_at(began)
-        .run()?;
+    let search = search::Search::new(&compiled, options, oracle)?.started_at(began);
+    let mut result = if search.has_portfolio() {
+        search.run_portfolio()?
+    } else {
+        search.run()?
+    };
     if let Outcome::Found { plan } = &mut result.outcome {
         plan.respell(domain, problem);
     }

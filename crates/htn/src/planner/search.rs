@@ -38,6 +38,7 @@ mod driver;
 mod frames;
 mod geo;
 mod limits;
+mod portfolio;
 mod relevance;
 mod repair;
 

@@ -646,7 +646,7 @@ impl<'a, 'o> Search<'a, 'o> {
             actions: MAX_ACTIONS,
             methods: MAX_METHODS,
             deadline,
-            memory_kb: l.memory_mb.map(|mb| mb.saturating_mul(1024)),
+            memory_kb: self.watch.memory_mb().map(|mb| mb.saturating_mul(1024)),
         }
     }
 

@@ -133,7 +133,7 @@ impl Search<'_, '_> {
 
     /// "No plan": only when no precondition join gave up at a limit on the way (a join cut
     /// short leaves bindings untried).
-    fn unsolvable_or_limit(&self) -> Outcome {
+    pub(super) fn unsolvable_or_limit(&self) -> Outcome {
         match self.watch.passed() {
             Some(limit) => Outcome::LimitReached { limit },
             None => Outcome::Unsolvable,

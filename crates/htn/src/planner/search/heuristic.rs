@@ -65,6 +65,7 @@ impl Caps {
     /// few microseconds).
     fn spent(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)
+            || crate::budget::stopped()
             || self.memory_kb.is_some_and(|kb| current_rss_kb() > kb)
     }
 }

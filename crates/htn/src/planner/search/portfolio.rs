@@ -1,0 +1,131 @@
+//! The portfolio on problems without geometric actions: when the depth-first search has
+//! found no plan in its share of the time limit (`1 - best_first_share`), the best-first search
+//! starts beside it, on a second thread, under the same limits, and the depth-first search goes
+//! on; the first to find a plan or to prove there is none decides, and the other stops at its
+//! next check. Why: each engine solves problems the other does not in time (one wrong early
+//! choice ruins the depth-first search for millions of nodes; a large ground model overwhelms
+//! the best-first one), and the handover that stopped the depth-first search there lost the
+//! problems it would have solved a few seconds later. Problems decided in the depth-first
+//! search's share are searched exactly as before, on one thread. The best-first search keeps
+//! to three quarters of the memory limit, so that it never starves the depth-first one.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use super::super::{Outcome, PlanError, SearchResult, current_rss_kb};
+use super::limits::drop_in_background;
+use super::{Search, Stop};
+use crate::budget::{StopOn, Watch};
+
+impl Search<'_, '_> {
+    /// Whether [`Search::run_portfolio`] applies: no geometric oracle, and the best-first
+    /// engine enabled under a time limit.
+    pub fn has_portfolio(&self) -> bool {
+        self.oracle.is_none() && self.switch_at.is_some()
+    }
+
+    /// Runs the depth-first engine here and, from its handover time on, the best-first engine
+    /// beside it (see the module's docs); where no thread can be started, [`Search::run`] with
+    /// its handover.
+    pub fn run_portfolio(mut self) -> Result<SearchResult, PlanError> {
+        let decided = Arc::new(AtomicBool::new(false));
+        let (c, opts, start) = (self.c, self.opts, self.start);
+        let deadline = opts.limits.time.and_then(|t| start.checked_add(t));
+        let begin = self.switch_at.and_then(|s| start.checked_add(s));
+        std::thread::scope(|scope| {
+            let flag = decided.clone();
+            let spawned = std::thread::Builder::new()
+                .name("htn-best-first".into())
+                .spawn_scoped(scope, move || {
+                    if !wait_until(begin, &flag) {
+                        return Ok(None);
+                    }
+                    let _stop = StopOn::install(flag.clone());
+                    let mut b = Search::new(c, &opts, None)?.started_at(start);
+                    b.watch = Watch::new(deadline, opts.limits.memory_mb.map(|m| m / 4 * 3));
+                    let r = b.run_best_first();
+                    if decisive(&r.outcome) {
+                        flag.store(true, Ordering::Relaxed);
+                    }
+                    Ok::<_, PlanError>(Some(r))
+                });
+            let Ok(best_first) = spawned else {
+                return self.run();
+            };
+            self.switch_at = None;
+            let stop = StopOn::install(decided.clone());
+            let depth_first = self.run();
+            drop(stop);
+            if depth_first.as_ref().map_or(true, |r| decisive(&r.outcome)) {
+                decided.store(true, Ordering::Relaxed);
+            }
+            let best_first = best_first
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e));
+            let depth_first = depth_first?;
+            Ok(match best_first? {
+                Some(b) => combine(depth_first, b),
+                None => depth_first,
+            })
+        })
+    }
+
+    /// The best-first engine alone, from the initial node.
+    fn run_best_first(mut self) -> SearchResult {
+        let outcome = match self.best_first() {
+            Stop::Found => Outcome::Found {
+                plan: self.build_plan(),
+            },
+            Stop::Limit(limit) => Outcome::LimitReached { limit },
+            Stop::Exhausted | Stop::Switch => self.unsolvable_or_limit(),
+        };
+        self.stats.time_s = self.start.elapsed().as_secs_f64();
+        drop_in_background((
+            std::mem::take(&mut self.gtasks),
+            std::mem::take(&mut self.arena),
+            std::mem::take(&mut self.tree),
+        ));
+        self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
+        SearchResult {
+            outcome,
+            stats: self.stats,
+        }
+    }
+}
+
+/// Waits until `begin` (at once without one); false when `decided` is set first.
+fn wait_until(begin: Option<Instant>, decided: &AtomicBool) -> bool {
+    while let Some(left) = begin.and_then(|b| b.checked_duration_since(Instant::now())) {
+        if decided.load(Ordering::Relaxed) {
+            return false;
+        }
+        std::thread::sleep(left.min(Duration::from_millis(5)));
+    }
+    !decided.load(Ordering::Relaxed)
+}
+
+/// A plan, or a proof that there is none.
+fn decisive(o: &Outcome) -> bool {
+    matches!(o, Outcome::Found { .. } | Outcome::Unsolvable)
+}
+
+/// The engine that decided (the depth-first one when both did), with both engines' node
+/// counts and the higher memory peak; both at a limit: the depth-first one's.
+fn combine(d: SearchResult, b: SearchResult) -> SearchResult {
+    let (mut winner, other) = if !decisive(&d.outcome) && decisive(&b.outcome) {
+        (b, d)
+    } else {
+        (d, b)
+    };
+    winner.stats.nodes += other.stats.nodes;
+    winner.stats.best_first_nodes = winner
+        .stats
+        .best_first_nodes
+        .max(other.stats.best_first_nodes);
+    winner.stats.rc_actions = winner.stats.rc_actions.max(other.stats.rc_actions);
+    winner.stats.rc_methods = winner.stats.rc_methods.max(other.stats.rc_methods);
+    winner.stats.peak_memory_kb = winner.stats.peak_memory_kb.max(other.stats.peak_memory_kb);
+    winner.stats.time_s = winner.stats.time_s.max(other.stats.time_s);
+    winner
+}
