@@ -217,6 +217,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_watch_stops_when_the_other_engine_has_decided() {
+        let flag = Arc::new(AtomicBool::new(false));
+        let guard = StopOn::install(flag.clone());
+        let w = Watch::new(None, None);
+        assert_eq!(w.check(), None);
+        flag.store(true, Ordering::Relaxed);
+        assert_eq!(w.check(), Some(Limit::Time));
+        drop(guard);
+        // Only this thread's watches, and only while the guard lives.
+        assert_eq!(Watch::new(None, None).check(), None);
+    }
+
+    #[test]
     fn a_watch_stops_at_its_deadline_and_memory() {
         let w = Watch::new(Some(Instant::now()), None);
         assert_eq!(w.check(), Some(Limit::Time));

@@ -37,6 +37,8 @@ impl Search<'_, '_> {
             let flag = decided.clone();
             let spawned = std::thread::Builder::new()
                 .name("htn-best-first".into())
+                // The main thread's stack, where the best-first search ran before.
+                .stack_size(8 << 20)
                 .spawn_scoped(scope, move || {
                     if !wait_until(begin, &flag) {
                         return Ok(None);
