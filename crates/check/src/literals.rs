@@ -133,13 +133,14 @@ fn visible(
     Some((stale, detail))
 }
 
-/// Grid steps over each head joint's range while aiming.
+/// Grid steps over each head joint's range while aiming, and rounds of finer grids.
 const AIM_STEPS: usize = 25;
+const AIM_ROUNDS: usize = 3;
 
 /// The eye of agent `a` with its head turned towards `target` as far as the head's joints
 /// allow (from the URDF the plan carries: the joints from its `head_pivot_link`'s down to its
-/// `eye_link`): of a grid over the joints' ranges, the pose whose forward axis points nearest
-/// the target. `None` without a URDF, a pivot or an eye, or with more than two head joints.
+/// `eye_link`): of a grid over the joints' ranges, refined around the best, the pose whose
+/// forward axis points nearest the target. `None` without a URDF, a pivot or an eye, or with more than two head joints.
 fn head_aimed(plan: &Plan, world: &World, a: usize, target: Vector) -> Option<Pose> {
     let agent = &plan.agents[a];
     let name = |l: usize| agent.links[l].name.as_str();
@@ -153,24 +154,41 @@ fn head_aimed(plan: &Plan, world: &World, a: usize, target: Vector) -> Option<Po
     if limits.is_empty() || limits.len() > 2 {
         return None;
     }
-    let at = |(lo, hi): (f64, f64), k: usize| lo + (hi - lo) * k as f64 / (AIM_STEPS - 1) as f64;
-    let second = if limits.len() == 2 { AIM_STEPS } else { 1 };
-    let mut best = (f64::NEG_INFINITY, Iso::IDENTITY);
-    for i in 0..AIM_STEPS {
-        for k in 0..second {
-            let mut values = vec![at(limits[0], i)];
-            values.extend(limits.get(1).map(|&l| at(l, k)));
-            let eye = chain.eye_pose(&root, &values);
-            let to = [0, 1, 2].map(|c| f64::from(target[c]) - eye.t[c]);
-            let fwd = eye.rotate([1.0, 0.0, 0.0]);
-            let norm = (to[0] * to[0] + to[1] * to[1] + to[2] * to[2])
-                .sqrt()
-                .max(1e-9);
-            let cos = (fwd[0] * to[0] + fwd[1] * to[1] + fwd[2] * to[2]) / norm;
-            if cos > best.0 {
-                best = (cos, eye);
+    // A grid over the joints' ranges, then finer grids around the best value found (a coarse
+    // grid alone can miss the aim by several degrees, enough to tip a view that grazes the
+    // viewer's own shoulder).
+    let mut ranges: Vec<(f64, f64)> = limits.clone();
+    let mut best = (f64::NEG_INFINITY, Iso::IDENTITY, vec![0.0; limits.len()]);
+    for _ in 0..AIM_ROUNDS {
+        let at =
+            |(lo, hi): (f64, f64), k: usize| lo + (hi - lo) * k as f64 / (AIM_STEPS - 1) as f64;
+        let second = if ranges.len() == 2 { AIM_STEPS } else { 1 };
+        for i in 0..AIM_STEPS {
+            for k in 0..second {
+                let mut values = vec![at(ranges[0], i)];
+                values.extend(ranges.get(1).map(|&l| at(l, k)));
+                let eye = chain.eye_pose(&root, &values);
+                let to = [0, 1, 2].map(|c| f64::from(target[c]) - eye.t[c]);
+                let fwd = eye.rotate([1.0, 0.0, 0.0]);
+                let norm = (to[0] * to[0] + to[1] * to[1] + to[2] * to[2])
+                    .sqrt()
+                    .max(1e-9);
+                let cos = (fwd[0] * to[0] + fwd[1] * to[1] + fwd[2] * to[2]) / norm;
+                if cos > best.0 {
+                    best = (cos, eye, values);
+                }
             }
         }
+        // The next grid: two steps of this one around the best value, within the limits.
+        ranges = ranges
+            .iter()
+            .zip(&limits)
+            .zip(&best.2)
+            .map(|(((lo, hi), (min, max)), v)| {
+                let step = (hi - lo) / (AIM_STEPS - 1) as f64;
+                ((v - step).max(*min), (v + step).min(*max))
+            })
+            .collect();
     }
     Some(pose(&best.1))
 }
