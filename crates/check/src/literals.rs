@@ -140,7 +140,8 @@ const AIM_ROUNDS: usize = 3;
 /// The eye of agent `a` with its head turned towards `target` as far as the head's joints
 /// allow (from the URDF the plan carries: the joints from its `head_pivot_link`'s down to its
 /// `eye_link`): of a grid over the joints' ranges, refined around the best, the pose whose
-/// forward axis points nearest the target. `None` without a URDF, a pivot or an eye, or with more than two head joints.
+/// forward axis points nearest the target. `None` without a URDF, a pivot or an eye, or with
+/// more than two head joints.
 fn head_aimed(plan: &Plan, world: &World, a: usize, target: Vector) -> Option<Pose> {
     let agent = &plan.agents[a];
     let name = |l: usize| agent.links[l].name.as_str();

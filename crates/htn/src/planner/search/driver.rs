@@ -84,8 +84,13 @@ impl<'a, 'o> Search<'a, 'o> {
                 }
             }
         };
+        Ok(self.finish(outcome))
+    }
+
+    /// The result of an engine that ended with `outcome`: its statistics completed, the tables
+    /// that grew with the search freed off the caller's time.
+    pub(super) fn finish(mut self, outcome: Outcome) -> SearchResult {
         self.stats.time_s = self.start.elapsed().as_secs_f64();
-        // The tables that grew with the search, freed off the caller's time.
         drop_in_background((
             std::mem::take(&mut self.gtasks),
             std::mem::take(&mut self.arena),
@@ -95,10 +100,10 @@ impl<'a, 'o> Search<'a, 'o> {
             std::mem::take(&mut self.htn_frames),
         ));
         self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
-        Ok(SearchResult {
+        SearchResult {
             outcome,
             stats: self.stats,
-        })
+        }
     }
 }
 

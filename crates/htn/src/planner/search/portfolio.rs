@@ -13,8 +13,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use super::super::{Outcome, PlanError, SearchResult, current_rss_kb};
-use super::limits::drop_in_background;
+use super::super::{Outcome, PlanError, SearchResult};
 use super::{Search, Stop};
 use crate::budget::{StopOn, Watch};
 
@@ -82,17 +81,7 @@ impl Search<'_, '_> {
             Stop::Limit(limit) => Outcome::LimitReached { limit },
             Stop::Exhausted | Stop::Switch => self.unsolvable_or_limit(),
         };
-        self.stats.time_s = self.start.elapsed().as_secs_f64();
-        drop_in_background((
-            std::mem::take(&mut self.gtasks),
-            std::mem::take(&mut self.arena),
-            std::mem::take(&mut self.tree),
-        ));
-        self.stats.peak_memory_kb = self.stats.peak_memory_kb.max(current_rss_kb());
-        SearchResult {
-            outcome,
-            stats: self.stats,
-        }
+        self.finish(outcome)
     }
 }
 
