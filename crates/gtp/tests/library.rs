@@ -470,43 +470,16 @@ l_wrist_roll_joint = -0.304
 }
 
 /// A PR2 in a closed pen, its target outside: navigate-to fails on the free region (the poses
-/// near the target are not connected to where the robot stands), not after a path search to
-/// every candidate pose; with the pen's walls against the base, at once.
+/// near the target are not connected to where the robot stands) without a path search; with
+/// the pen's walls against the base, at once. The crate in a pen of its own, the robot
+/// outside: the same, without a path search either.
 #[test]
 fn navigate_to_says_when_the_base_is_penned_in() {
     let pen = |gap: f32, open: bool| {
         let h = 0.36 + gap; // the PR2's base is about 0.67 m square
         // The east wall stands between the robot and the crate; open, it is far away.
         let east = if open { 2.9 } else { h };
-        let text = format!(
-            r#"
-[scene]
-bounds = {{ min = [-2.0, -2.0, -0.05], max = [3.0, 2.0, 2.0] }}
-[[objects]]
-name = "wall-n"
-shape = {{ box = [{w}, 0.02, 0.5] }}
-pose = {{ xyz = [0.0, {h}, 0.5] }}
-[[objects]]
-name = "wall-s"
-shape = {{ box = [{w}, 0.02, 0.5] }}
-pose = {{ xyz = [0.0, -{h}, 0.5] }}
-[[objects]]
-name = "wall-e"
-shape = {{ box = [0.02, {w}, 0.5] }}
-pose = {{ xyz = [{east}, 0.0, 0.5] }}
-[[objects]]
-name = "wall-w"
-shape = {{ box = [0.02, {w}, 0.5] }}
-pose = {{ xyz = [-{h}, 0.0, 0.5] }}
-[[objects]]
-name = "crate"
-shape = {{ box = [0.2, 0.2, 0.45] }}
-pose = {{ xyz = [2.2, 0.0, 0.45] }}
-movable = true
-"#,
-            w = h + 0.02,
-        );
-        tucked_pr2_world(&text, (0.0, 0.0, 0.0))
+        pen_world(h, east, 2.2, (0.0, 0.0, 0.0))
     };
     let planner = Planner::new();
     let world = pen(0.12, true);
@@ -527,7 +500,51 @@ movable = true
         let f = stream.failure().unwrap();
         assert!(f.message.contains(words), "gap {gap}: {f}");
         assert!(!f.limit, "gap {gap}: {f}");
+        assert_eq!(stream.stats().planner_calls, 0, "gap {gap}: {f}");
     }
+    // The robot 1.5 m west of a closed pen around the crate (walls 1 m from its centre).
+    let world = pen_world(1.0, 1.0, 0.0, (-2.0, 0.0, 0.0));
+    let mut stream = planner
+        .run(&world, "navigate-to", &["crate"], &CallOptions::seeded(1))
+        .unwrap();
+    assert!(stream.next().is_none(), "into the crate's closed pen");
+    let f = stream.failure().unwrap();
+    assert!(f.message.contains("not connected"), "{f}");
+    assert_eq!(stream.stats().planner_calls, 0, "{f}");
+}
+
+/// A PR2 at `(x, y, yaw)` (degrees) and a crate at `(crate_x, 0)` with walls around the
+/// origin, `h` from it to the north, south and west, `east` to the east.
+fn pen_world(h: f32, east: f32, crate_x: f32, robot: (f32, f32, f32)) -> World {
+    let text = format!(
+        r#"
+[scene]
+bounds = {{ min = [-3.0, -2.0, -0.05], max = [3.0, 2.0, 2.0] }}
+[[objects]]
+name = "wall-n"
+shape = {{ box = [{w}, 0.02, 0.5] }}
+pose = {{ xyz = [0.0, {h}, 0.5] }}
+[[objects]]
+name = "wall-s"
+shape = {{ box = [{w}, 0.02, 0.5] }}
+pose = {{ xyz = [0.0, -{h}, 0.5] }}
+[[objects]]
+name = "wall-e"
+shape = {{ box = [0.02, {w}, 0.5] }}
+pose = {{ xyz = [{east}, 0.0, 0.5] }}
+[[objects]]
+name = "wall-w"
+shape = {{ box = [0.02, {w}, 0.5] }}
+pose = {{ xyz = [-{h}, 0.0, 0.5] }}
+[[objects]]
+name = "crate"
+shape = {{ box = [0.2, 0.2, 0.45] }}
+pose = {{ xyz = [{crate_x}, 0.0, 0.45] }}
+movable = true
+"#,
+        w = h + 0.02,
+    );
+    tucked_pr2_world(&text, robot)
 }
 
 /// A wall with a gap the PR2's base (about 0.67 m square) passes only turned square to it, the
