@@ -77,6 +77,9 @@ impl Search {
             }
             self.verdicts.insert(key, Verdict::Prechecked);
         }
+        if !placing && !self.hand_over_may_show(key, o, t.orientation.pose, level) {
+            return None;
+        }
         let m = self.grasp_motions(t.grasp)?;
         let held = m.holding(self.obstacles.workspace_but_object.clone());
         let q_place = self.placement_ik(t.grasp, &held, tool, &mut rng)?;
