@@ -843,11 +843,11 @@ fn a_book_under_a_board_is_pulled_out_and_pushed_back_in() {
 }
 
 /// The member behind a grille (slats 3 cm wide, 1 cm apart, across and upright, over their
-/// whole view of the desk): no hand-over pose shows the book well enough, and each pose is given up on the
-/// visibility measured with the robot out of the way, before any inverse kinematics of an arm
-/// posture there (the robot's arm only hides more of the book).
+/// whole view of the desk): no hand-over pose shows the book well enough, and the show fails
+/// on visibility, with the best it found (each pose the arm reaches measured once, with the
+/// robot out of the way: the robot's arm only hides more of the book).
 #[test]
-fn a_show_behind_a_grille_fails_on_visibility_before_any_arm_posture() {
+fn a_show_behind_a_grille_fails_on_visibility() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../domains/library/");
     let mut text = std::fs::read_to_string(format!("{dir}scene.toml")).unwrap();
     let slat = |half: [f32; 3], at: [f32; 3]| {
@@ -876,13 +876,12 @@ fn a_show_behind_a_grille_fails_on_visibility_before_any_arm_posture() {
     assert!(stream.next().is_none(), "the book shown through the grille");
     let f = stream.failure().unwrap();
     assert_eq!(f.stage, Stage::Visibility, "{f}");
-    // The pick's inverse kinematics, at most one per grasp, and none at a hand-over pose
-    // (before the bound: 52,614 calls).
-    let st = stream.stats();
-    assert!(
-        st.ik_calls <= st.grasps,
-        "{} IK calls, {} grasps: {f}",
-        st.ik_calls,
-        st.grasps
-    );
+    let best: f32 = f
+        .message
+        .split("best visibility ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no best visibility in: {f}"));
+    assert!((0.0..0.9).contains(&best), "{f}");
 }

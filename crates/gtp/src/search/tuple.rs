@@ -52,10 +52,11 @@ impl Search {
             return self.pick_solution(t.grasp, level);
         }
         // A placement whose reach or visibility already failed fails for every grasp (the world
-        // after a placement does not depend on the grasp: the arm returns to where it was).
+        // after a placement does not depend on the grasp: the arm returns to where it was); so
+        // does a hand-over pose whose bound on visibility failed.
         let key = self.cursor.placement(t.orientation_index);
         let placing = !kind.hands_over();
-        if placing && self.verdict(key) == Some(Verdict::Failed) {
+        if self.verdict(key) == Some(Verdict::Failed) {
             return None;
         }
         let ch = self.choices[t.grasp];
@@ -77,12 +78,12 @@ impl Search {
             }
             self.verdicts.insert(key, Verdict::Prechecked);
         }
-        if !placing && !self.hand_over_may_show(key, o, t.orientation.pose, level) {
-            return None;
-        }
         let m = self.grasp_motions(t.grasp)?;
         let held = m.holding(self.obstacles.workspace_but_object.clone());
         let q_place = self.placement_ik(t.grasp, &held, tool, &mut rng)?;
+        if !placing && !self.hand_over_may_show(key, o, t.orientation.pose, level) {
+            return None;
+        }
         // The world after the task, for the visibility test.
         let after = if placing {
             self.placed_world(o, t.orientation.pose)
