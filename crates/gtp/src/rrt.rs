@@ -229,6 +229,16 @@ pub enum RrtError {
     Dimension { expected: usize, got: usize },
 }
 
+impl RrtError {
+    /// Whether the query spent its budget (nodes, checks or time) without connecting.
+    pub fn is_budget(&self) -> bool {
+        matches!(
+            self,
+            RrtError::NodeLimit(_) | RrtError::CheckLimit(_) | RrtError::TimeLimit(_)
+        )
+    }
+}
+
 /// What one query did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RrtStats {

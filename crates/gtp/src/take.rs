@@ -35,10 +35,32 @@ pub struct TakeMotion {
     pub q_end: Vec<f32>,
 }
 
+/// Why a take cannot be planned: which motion failed and why, and whether the reach's path
+/// search spent its budget to fail (the caller's later searches may then get less).
+#[derive(Clone, Debug, Default)]
+pub struct TakeError {
+    pub message: String,
+    pub search_failed: bool,
+}
+
+impl From<String> for TakeError {
+    fn from(message: String) -> Self {
+        TakeError {
+            message,
+            search_failed: false,
+        }
+    }
+}
+
+impl std::fmt::Display for TakeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
 /// Plans a take of `object` by `person`'s arm `arm`: the reach in `before` (the robot holding
 /// the object out), the withdraw in `after` (the robot drawn back). The reach's end, the hand on
 /// the object, just clear of it, fixes the grasp; from then on the object is rigid in the hand.
-/// The error says which motion failed and why.
 pub fn plan_take(
     person: &RobotSetup,
     arm: usize,
@@ -47,7 +69,7 @@ pub fn plan_take(
     object: ObjectId,
     rrt: &RrtParams,
     rng: &mut fastrand::Rng,
-) -> Result<TakeMotion, String> {
+) -> Result<TakeMotion, TakeError> {
     let h = person.agent;
     let a = &person.arms[arm];
     let q0 = before.agent_state(h).q.clone();
@@ -55,9 +77,7 @@ pub fn plan_take(
     let reach_motion = arm_motion_among(person, arm, before, &[], None, object)?;
     let qa0 = robot::arm_values(a, &q0);
     if let Some(c) = reach_motion.collision(&qa0) {
-        return Err(format!(
-            "the person's posture collides before the reach: {c}"
-        ));
+        return Err(format!("the person's posture collides before the reach: {c}").into());
     }
     let goal = reach_goal(&reach_motion, before, object, &qa0, rng).map_err(|why| {
         format!(
@@ -67,12 +87,15 @@ pub fn plan_take(
     })?;
     let reach = reach_motion
         .plan(&qa0, &goal, rrt, rng)
-        .map_err(|e| format!("no collision-free reach: {e}"))?
+        .map_err(|e| TakeError {
+            message: format!("no collision-free reach: {e}"),
+            search_failed: e.is_budget(),
+        })?
         .0;
     let grasp = reach_motion.tool_pose(&goal).inverse() * before.object_pose(object);
     let carry = arm_motion(person, arm, after, object, Some(grasp))?;
     if let Some(c) = carry.collision(&goal) {
-        return Err(format!("holding the object at the hand-over collides: {c}"));
+        return Err(format!("holding the object at the hand-over collides: {c}").into());
     }
     let withdraw = withdraw(&carry, after, &goal, rrt, rng);
     let q_end = carry.full(withdraw.waypoints.last().unwrap_or(&goal));

@@ -334,10 +334,7 @@ impl Search {
 
     /// Counts a trajectory query that used up its budget (node, check or time limit).
     fn note_rrt<T>(&mut self, r: &Result<T, RrtError>) {
-        if matches!(
-            r,
-            Err(RrtError::NodeLimit(_) | RrtError::CheckLimit(_) | RrtError::TimeLimit(_))
-        ) {
+        if r.as_ref().is_err_and(RrtError::is_budget) {
             self.rrt_failures.fetch_add(1, Ordering::Relaxed);
         }
     }

@@ -3,6 +3,7 @@
 //! robot holds it; the robot opens its gripper and draws it back (straight, else planned).
 
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 use geometry::collision::StaticObstacles;
 use geometry::scene::{AgentId, ObjectId};
@@ -283,25 +284,36 @@ impl Search {
             ));
         };
         let mut rng = fastrand::Rng::with_seed(self.rng.u64(..));
-        let rrt = self.cfg.rrt.clone();
         let mut first_error = None;
+        // Each reach gets the call's budget (Search::rrt_params): smaller after failed ones.
         for &arm in &free {
             self.stats.planner_calls += 2;
+            let rrt = self.rrt_params();
             match crate::take::plan_take(&person, arm, before, after, o, &rrt, &mut rng) {
                 Ok(m) => return Some((m, person, Vec::new())),
                 Err(e) => {
+                    self.note_take_failure(&e);
                     first_error.get_or_insert(e);
                 }
             }
         }
+        let rrt = self.rrt_params();
         let rested =
             crate::take::rest_other_arms(&person, nearest, before, after, o, &rrt, &mut rng);
         if let Ok(r) = rested {
             self.stats.planner_calls += 2 + r.moves.len();
+            // The nearest arm's reach again, the others out of its way: with half the budget
+            // at most, the whole spent once already.
+            let mut rrt = self.rrt_params();
+            if first_error.as_ref().is_some_and(|e| e.search_failed) {
+                rrt.max_nodes = rrt.max_nodes.min(self.cfg.rrt.max_nodes / 2);
+                rrt.max_checks = rrt.max_checks.min(self.cfg.rrt.max_checks / 2);
+            }
             let take =
                 crate::take::plan_take(&person, nearest, &r.before, &r.after, o, &rrt, &mut rng);
-            if let Ok(m) = take {
-                return Some((m, person, r.moves));
+            match take {
+                Ok(m) => return Some((m, person, r.moves)),
+                Err(e) => self.note_take_failure(&e),
             }
         }
         let e = first_error.unwrap_or_default();
@@ -309,6 +321,14 @@ impl Search {
             format!("{hname} cannot take `{oname}`: {e}")
         });
         None
+    }
+
+    /// Counts a take whose reach search spent its budget with the call's failed trajectory
+    /// queries (see [`Search::rrt_params`]).
+    fn note_take_failure(&mut self, e: &crate::take::TakeError) {
+        if e.search_failed {
+            self.rrt_failures.fetch_add(1, Ordering::Relaxed);
+        }
     }
 
     /// A take's solution: the world after it, the effort at which the human reached the
