@@ -78,6 +78,22 @@ const STRAIGHT_STEPS: usize = 3;
 const FULL_RRT_FAILURES: usize = 2;
 /// See [`FULL_RRT_FAILURES`]: the least share of the budget, 250 nodes and 5,000 checks.
 const LEAST_RRT_SHARE: usize = 20;
+/// After this many more failed queries (beyond [`FULL_RRT_FAILURES`]) the halving resumes
+/// below [`LEAST_RRT_SHARE`], down to little more than the straight connection: a call
+/// whose motions keep failing must not cost a query per candidate (a random room's
+/// make-accessible made 138 queries, 2.8 s, and failed).
+const LEAST_SHARE_FAILURES: usize = 16;
+
+/// The share of the configured budget (its divisor) that a call's next trajectory query gets
+/// after `failures` failed ones: whole for the first [`FULL_RRT_FAILURES`], then halved per
+/// failure down to a [`LEAST_RRT_SHARE`]th, then, after [`LEAST_SHARE_FAILURES`] more, halved
+/// again per failure.
+fn rrt_share(failures: usize) -> usize {
+    let halvings = (failures + 1).saturating_sub(FULL_RRT_FAILURES);
+    let share = (1usize << halvings.min(8)).min(LEAST_RRT_SHARE);
+    let beyond = (failures + 1).saturating_sub(FULL_RRT_FAILURES + LEAST_SHARE_FAILURES);
+    share << beyond.min(16)
+}
 
 /// The obstacle sets of a search, built once from the world at the start.
 ///
@@ -297,13 +313,9 @@ impl Search {
     /// ones, or a smaller budget once [`FULL_RRT_FAILURES`] queries have failed.
     fn rrt_params(&self) -> RrtParams {
         let mut p = self.cfg.rrt.clone();
-        let failures = self.rrt_failures.load(Ordering::Relaxed);
-        let halvings = (failures + 1).saturating_sub(FULL_RRT_FAILURES);
-        if halvings > 0 {
-            let share = (1usize << halvings.min(8)).min(LEAST_RRT_SHARE);
-            p.max_nodes = (p.max_nodes / share).max(2);
-            p.max_checks = (p.max_checks / share).max(2);
-        }
+        let share = rrt_share(self.rrt_failures.load(Ordering::Relaxed));
+        p.max_nodes = (p.max_nodes / share).max(2);
+        p.max_checks = (p.max_checks / share).max(2);
         p
     }
 
@@ -394,5 +406,21 @@ impl Search {
         self.human
             .map(|h| self.world.agent(h).name().to_string())
             .unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_calls_trajectory_budget_shrinks_with_its_failures() {
+        let shares: Vec<usize> = (0..8).map(rrt_share).collect();
+        assert_eq!(shares, [1, 1, 2, 4, 8, 16, 20, 20]);
+        let floor = FULL_RRT_FAILURES + LEAST_SHARE_FAILURES;
+        assert_eq!(rrt_share(floor - 1), LEAST_RRT_SHARE);
+        assert_eq!(rrt_share(floor), 2 * LEAST_RRT_SHARE);
+        // Long after: the straight connection and little more (2 nodes, the least).
+        assert!(RrtParams::default().max_nodes / rrt_share(floor + 10) < 2);
     }
 }
