@@ -93,29 +93,17 @@ impl Search {
         if let Some(v) = self.verdict(key) {
             return v != Verdict::Failed;
         }
-        let mut world = self.released_world(o, pose);
-        let robot = self.setup.agent;
+        let mut world = self.world.clone();
         let away = Pose::from_parts(Vector::new(0.0, 0.0, -FAR_BELOW), Default::default());
-        world.set_agent_config(robot, away, &self.q0_full);
+        world.set_agent_config(self.setup.agent, away, &self.q0_full);
+        world.set_object_pose(o, pose);
         self.stats.visibility_checks += 1;
         let resolution = self.cfg.visibility_resolution;
         // The first view (head as it is, turned, a stance) that shows enough ends the measure.
         let enough = Some(min - HAND_OVER_BOUND_SLACK);
         let bound = visibility_upto(&world, h, o, level, resolution, enough);
         let v = if bound + HAND_OVER_BOUND_SLACK < min {
-            let oname = self.object_name();
-            let hname = self.human_name();
-            let best = self
-                .rejections
-                .best_visibility
-                .map_or(bound, |b| b.max(bound));
-            self.rejections.best_visibility = Some(best);
-            self.reject(Stage::Visibility, || {
-                format!(
-                    "no hand-over pose of `{oname}` visible enough to {hname}: best \
-                     visibility {best:.2} (needs >= {min:.2})"
-                )
-            });
+            self.shown_too_little(bound, min, "hand-over pose");
             Verdict::Failed
         } else {
             Verdict::Prechecked
@@ -172,6 +160,20 @@ impl Search {
         true
     }
 
+    /// Records a `what` (placement, hand-over pose) that shows the object too little.
+    fn shown_too_little(&mut self, v: f32, min: f32, what: &str) {
+        let oname = self.object_name();
+        let hname = self.human_name();
+        let best = self.rejections.best_visibility.map_or(v, |b| b.max(v));
+        self.rejections.best_visibility = Some(best);
+        self.reject(Stage::Visibility, || {
+            format!(
+                "no {what} of `{oname}` visible enough to {hname}: best visibility {best:.2} \
+                 (needs >= {min:.2})"
+            )
+        });
+    }
+
     /// Records a hiding place that shows too much.
     fn hidden_failed(&mut self, v: f32, max: f32) {
         let hname = self.human_name();
@@ -200,16 +202,7 @@ impl Search {
         if let Some(min) = self.c.min_visibility
             && v < min
         {
-            let oname = self.object_name();
-            let hname = self.human_name();
-            let best = self.rejections.best_visibility.map_or(v, |b| b.max(v));
-            self.rejections.best_visibility = Some(best);
-            self.reject(Stage::Visibility, || {
-                format!(
-                    "no placement of `{oname}` visible enough to {hname}: best visibility \
-                     {best:.2} (needs >= {min:.2})"
-                )
-            });
+            self.shown_too_little(v, min, "placement");
             return Verdict::Failed;
         }
         if let Some(max) = self.c.max_visibility
