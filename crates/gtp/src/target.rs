@@ -6,7 +6,7 @@
 //! point nearest the shoulder); for another large object, the point of its shape nearest the
 //! shoulder. Base poses are then tried around the target's footprint, not around its centre.
 
-use geometry::scene::ObjectId;
+use geometry::scene::{AgentId, ObjectId};
 use geometry::world::World;
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
@@ -25,6 +25,11 @@ pub enum ReachTarget {
     Surfaces(Vec<(Pose, [f32; 2])>),
     /// A large object's shape at its world pose.
     Shape(SharedShape, Pose),
+    /// What a person reaches with an arm extended (effort level 1): a ball of their reach
+    /// around each shoulder. A placement or hand-over for them lies in it, so the robot's arm
+    /// must reach into it, not up to their eyes (across a counter, the eyes are out of reach
+    /// where the person's hand is not).
+    Person { shoulders: Vec<Vector>, reach: f32 },
 }
 
 /// Base stand-off distances (metres) from the footprint of a point target (the rings the base
@@ -55,10 +60,24 @@ impl ReachTarget {
         }
     }
 
+    /// The reach of person `h` in `world` where they stand now.
+    pub fn person(world: &World, h: AgentId) -> ReachTarget {
+        let state = world.agent_state(h);
+        ReachTarget::Person {
+            shoulders: geometry::effort::shoulders(world, h, state.base, &state.q),
+            reach: world.agent(h).reach,
+        }
+    }
+
     /// The point of the target nearest `p`.
     pub fn nearest(&self, p: Vector) -> Vector {
         match self {
             ReachTarget::Point(c) => *c,
+            ReachTarget::Person { shoulders, reach } => shoulders
+                .iter()
+                .map(|s| *s + (p - *s).clamp_length_max(*reach))
+                .min_by(|a, b| (*a - p).length().total_cmp(&(*b - p).length()))
+                .unwrap_or(p),
             ReachTarget::Surfaces(list) => list
                 .iter()
                 .map(|(pose, h)| {
@@ -102,6 +121,12 @@ impl ReachTarget {
                 let b = shape.compute_aabb(pose);
                 add(b.mins);
                 add(b.maxs);
+            }
+            ReachTarget::Person { shoulders, reach } => {
+                for s in shoulders {
+                    add(*s - Vector::splat(*reach));
+                    add(*s + Vector::splat(*reach));
+                }
             }
         }
         (lo, hi)
@@ -149,5 +174,35 @@ impl ReachTarget {
         }
         out.sort_by(|a, b| (*a - from).length().total_cmp(&(*b - from).length()));
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A person across a counter: their eyes are beyond the robot's reach where their hand is
+    /// not, so a pose from which the arms meet over the counter counts as reaching them.
+    #[test]
+    fn a_person_is_reached_where_the_arms_meet() {
+        let shoulders = vec![Vector::new(0.9, -0.2, 1.4), Vector::new(0.9, 0.2, 1.4)];
+        let eye = Vector::new(0.9, 0.0, 1.6);
+        let robot = [Vector::new(-0.45, 0.0, 1.2)];
+        let reach = 0.9;
+        assert!(!ReachTarget::Point(eye).within_reach(&robot, reach));
+        let person = ReachTarget::Person {
+            shoulders,
+            reach: 0.7,
+        };
+        assert!(person.within_reach(&robot, reach));
+        // The point nearest the robot lies on a shoulder's ball, towards the robot.
+        let p = person.nearest(robot[0]);
+        let d = (p - Vector::new(0.9, -0.2, 1.4))
+            .length()
+            .min((p - Vector::new(0.9, 0.2, 1.4)).length());
+        assert!((d - 0.7).abs() < 1e-4, "{d}");
+        assert!(p.x < 0.9);
+        // Beyond both reaches, it is not.
+        assert!(!person.within_reach(&[Vector::new(-1.0, 0.0, 1.2)], reach));
     }
 }

@@ -469,6 +469,67 @@ l_wrist_roll_joint = -0.304
     World::from_scene(scene.unwrap()).unwrap()
 }
 
+/// A member standing 1 m past the far end of a long counter, 3 m from the robot: from no base
+/// pose within a step (1 m) does the robot's arm reach into the member's, so the give drives
+/// the robot round with the book it picked (effort level 4, within the robot's move radius)
+/// and hands the book over from there, every trajectory re-checked, the book within the
+/// member's reach.
+#[test]
+fn a_give_drives_to_a_member_beyond_a_step() {
+    let human = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/human.urdf");
+    let text = format!(
+        r#"
+[scene]
+bounds = {{ min = [-2.0, -2.0, -0.05], max = [2.0, 3.0, 2.0] }}
+[[objects]]
+name = "counter"
+support = true
+surfaces = [{{ centre = [0.0, 0.0, 1.0], half_extents = [0.3, 1.2] }}]
+shape = {{ box = [0.3, 1.2, 0.5] }}
+pose = {{ xyz = [0.0, 0.0, 0.5] }}
+[[objects]]
+name = "book"
+shape = {{ box = [0.07, 0.1, 0.015] }}
+pose = {{ xyz = [-0.15, -0.8, 1.0702], rpy = [0, 90, 0] }}
+movable = true
+[[agents]]
+name = "member"
+kind = "human"
+urdf = "{human}"
+base = {{ x = 0.0, y = 2.2, yaw = -90 }}
+sitting = false
+[agents.joints]
+pelvis_lift_joint = 0.4
+r_hip_joint = 1.5708
+l_hip_joint = 1.5708
+r_knee_joint = -1.5708
+l_knee_joint = -1.5708
+r_shoulder_roll_joint = -0.1
+l_shoulder_roll_joint = 0.1
+"#,
+        human = human.display()
+    );
+    let world = tucked_pr2_world(&text, (-0.75, -0.8, 0.0));
+    let planner = Planner::new();
+    let robot = planner.robot(&world).unwrap().agent;
+    let station = world.agent_state(robot).base.translation;
+    let held = first(&planner, &world, "pick", &["book"]).world;
+    let s = first(&planner, &held, "give", &["book", "member"]);
+    recheck(&planner, &held, &s);
+    assert_eq!(s.summary.trajectories[0].phase, Phase::Drive);
+    let pose = s.summary.base_move.expect("the base pose worked from");
+    let moved = ((pose[0] - station.x).powi(2) + (pose[1] - station.y).powi(2)).sqrt();
+    assert!(moved > 1.0, "stepped only {moved} m");
+    let (h, o) = (
+        world.agent_id("member").unwrap(),
+        world.object_id("book").unwrap(),
+    );
+    assert!(
+        reach_within(&s.world, h, o, 1).is_some(),
+        "out of the member's reach"
+    );
+}
+
 /// A PR2 in a closed pen, its target outside: navigate-to fails on the free region (the poses
 /// near the target are not connected to where the robot stands) without a path search; with
 /// the pen's walls against the base, at once. The crate in a pen of its own, the robot

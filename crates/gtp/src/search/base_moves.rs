@@ -7,7 +7,10 @@
 //! there is that drive, the task, and, when the task put the object down (the hand empty), the
 //! drive back to where the robot stood if there is one (the task then leaves the robot where the
 //! domain put it: moving it for good is `navigate-to`'s job); else the robot stays where it
-//! worked (after a pick or a hand-over, with the object held out).
+//! worked (after a pick or a hand-over, with the object held out). When no pose within
+//! [`STEP_RADIUS`] is reached (the target too far for the arm from every one, or none free), the
+//! poses within the agent's `move_radius` are tried the same way: level 4 is a drive (a member
+//! at the far end of a long counter is handed a book after the robot drives round to them).
 
 use std::time::Duration;
 
@@ -31,6 +34,10 @@ const POSE_TIME_SHARE: u32 = 16;
 pub(crate) struct BaseMoves {
     /// `navigate-to` over the poses nearby: each solution is a drive to one.
     stances: Search,
+    /// How far from where the robot stands [`BaseMoves::stances`] looks (metres).
+    radius: f32,
+    /// The agent's move radius, searched once no pose within [`STEP_RADIUS`] was reached.
+    drive_radius: Option<f32>,
     /// The drive to the current pose and the task's search from there.
     here: Option<(Solution, Search)>,
     /// Why the task failed where the robot stood.
@@ -71,23 +78,14 @@ impl BaseMoves {
         if radius == 0.0 && limits.base_turn == 0.0 {
             return None;
         }
-        let nav = stance_task(search)?;
-        let mut c = search.c.clone();
-        c.time_limit = search.c.time_limit.checked_sub(search.elapsed)?;
-        let mut stances = Search::new(
-            search.cfg.clone(),
-            search.setup.clone(),
-            search.world.clone(),
-            nav,
-            c,
-            seed,
-        )
-        .ok()?
-        .into_base_move(search);
-        // Level 2 turns the base in place; level 4 steps too.
-        stances.stance_radius = Some(radius);
+        let stances = stances(search, radius, search.elapsed, seed)?;
+        // Level 4 drives within the agent's move radius when no step reaches.
+        let drive_radius =
+            (radius > 0.0 && limits.move_radius > radius).then_some(limits.move_radius);
         Some(BaseMoves {
             stances,
+            radius,
+            drive_radius,
             here: None,
             at_start: failure,
             finished: Stats::default(),
@@ -131,6 +129,9 @@ impl BaseMoves {
                 n if n >= MAX_POSES_SEARCHED => None,
                 _ => self.stances.next_solution(),
             };
+            if drive.is_none() && self.widen(template) {
+                continue;
+            }
             let (Some(drive), Some(left)) = (drive, self.time_left()) else {
                 self.failure = Some(self.explain());
                 return None;
@@ -149,6 +150,29 @@ impl BaseMoves {
             };
             self.here = Some((drive, search.into_base_move(template)));
         }
+    }
+
+    /// Looks farther, within the agent's move radius, when no pose within [`STEP_RADIUS`] was
+    /// reached (none searched, so no time went to the task from one) and time is left.
+    fn widen(&mut self, template: &Search) -> bool {
+        if self.stances.stats.solutions > 0
+            || self.stances.failure.as_ref().is_some_and(|f| f.limit)
+        {
+            return false;
+        }
+        let Some(radius) = self.drive_radius.take() else {
+            return false;
+        };
+        let spent = Duration::from_secs_f64(self.spent_before + self.stats().time_s);
+        let Some(wider) = stances(template, radius, spent, self.seed) else {
+            return false;
+        };
+        self.finished.base_poses += self.stances.stats.points;
+        self.finished.planner_calls += self.stances.stats.planner_calls;
+        self.finished.time_s += self.stances.stats.time_s;
+        self.stances = wider;
+        self.radius = radius;
+        true
     }
 
     /// The drive from where `task` leaves the robot back to where `template`'s search started
@@ -230,12 +254,38 @@ impl BaseMoves {
                 self.at_start.stage
             },
             message: format!(
-                "{}; then {tried} base pose(s) within {STEP_RADIUS} m (turning, stepping): {nearby}",
-                self.at_start.message
+                "{}; then {tried} base pose(s) within {} m ({}): {nearby}",
+                self.at_start.message,
+                self.radius,
+                if self.radius > STEP_RADIUS {
+                    "turning, stepping, driving"
+                } else {
+                    "turning, stepping"
+                }
             ),
             limit: out_of_time,
         }
     }
+}
+
+/// The `navigate-to` search over the poses within `radius` of where the robot stands in
+/// `search` (0: turning in place), with the call's time left after `spent`.
+fn stances(search: &Search, radius: f32, spent: Duration, seed: u64) -> Option<Search> {
+    let nav = stance_task(search)?;
+    let mut c = search.c.clone();
+    c.time_limit = search.c.time_limit.checked_sub(spent)?;
+    let mut stances = Search::new(
+        search.cfg.clone(),
+        search.setup.clone(),
+        search.world.clone(),
+        nav,
+        c,
+        seed,
+    )
+    .ok()?
+    .into_base_move(search);
+    stances.stance_radius = Some(radius);
+    Some(stances)
 }
 
 /// Whether a base move may help after a failure at `stage`: from elsewhere the robot reaches
@@ -280,6 +330,11 @@ fn stance_task(search: &Search) -> Option<Task> {
         let h = search.human?;
         nav.args.push(world.agent(h).name().to_string());
         nav.target_point = Some(world.eye_pose(h).translation);
+        // What the person must take or reach is within their reach: poses from which the arm
+        // reaches into it (see `ReachTarget::Person`); a show is for their eyes.
+        if matches!(kind, TaskKind::Give | TaskKind::MakeAccessible) {
+            nav.human = Some(h);
+        }
     }
     Some(nav)
 }

@@ -45,9 +45,10 @@ impl Search {
                     .into(),
             ));
         }
-        let target = match self.task.target_object {
-            Some(o) => ReachTarget::object(&self.world, o),
-            None => ReachTarget::Point(self.task.target_point?),
+        let target = match (self.task.target_object, self.task.human) {
+            (Some(o), _) => ReachTarget::object(&self.world, o),
+            (None, Some(h)) => ReachTarget::person(&self.world, h),
+            (None, None) => ReachTarget::Point(self.task.target_point?),
         };
         if self.cursor.points.is_none() {
             self.cursor.points = Some(self.base_candidates(&target));
