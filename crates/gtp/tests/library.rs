@@ -512,8 +512,9 @@ l_shoulder_roll_joint = 0.1
     let world = tucked_pr2_world(&text, (-0.75, -0.8, 0.0));
     let planner = Planner::new();
     let robot = planner.robot(&world).unwrap().agent;
-    let station = world.agent_state(robot).base.translation;
     let held = first(&planner, &world, "pick", &["book"]).world;
+    // Where the robot stands when asked to give (the pick may have moved it).
+    let station = held.agent_state(robot).base.translation;
     let s = first(&planner, &held, "give", &["book", "member"]);
     recheck(&planner, &held, &s);
     assert_eq!(s.summary.trajectories[0].phase, Phase::Drive);
