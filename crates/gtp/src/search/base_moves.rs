@@ -78,7 +78,8 @@ impl BaseMoves {
         if radius == 0.0 && limits.base_turn == 0.0 {
             return None;
         }
-        let stances = stances(search, radius, search.elapsed, seed)?;
+        let left = search.c.time_limit.checked_sub(search.elapsed)?;
+        let stances = stances(search, radius, left, seed)?;
         // Level 4 drives within the agent's move radius when no step reaches.
         let drive_radius =
             (radius > 0.0 && limits.move_radius > radius).then_some(limits.move_radius);
@@ -163,13 +164,13 @@ impl BaseMoves {
         let Some(radius) = self.drive_radius.take() else {
             return false;
         };
-        let spent = Duration::from_secs_f64(self.spent_before + self.stats().time_s);
-        let Some(wider) = stances(template, radius, spent, self.seed) else {
+        let Some(wider) = self
+            .time_left()
+            .and_then(|left| stances(template, radius, left, self.seed))
+        else {
             return false;
         };
-        self.finished.base_poses += self.stances.stats.points;
-        self.finished.planner_calls += self.stances.stats.planner_calls;
-        self.finished.time_s += self.stances.stats.time_s;
+        add_stances(&mut self.finished, &self.stances.stats);
         self.stances = wider;
         self.radius = radius;
         true
@@ -213,9 +214,7 @@ impl BaseMoves {
         if let Some((_, search)) = &self.here {
             s.accumulate(&search.stats);
         }
-        s.base_poses += self.stances.stats.points;
-        s.planner_calls += self.stances.stats.planner_calls;
-        s.time_s += self.stances.stats.time_s;
+        add_stances(&mut s, &self.stances.stats);
         s
     }
 
@@ -269,11 +268,11 @@ impl BaseMoves {
 }
 
 /// The `navigate-to` search over the poses within `radius` of where the robot stands in
-/// `search` (0: turning in place), with the call's time left after `spent`.
-fn stances(search: &Search, radius: f32, spent: Duration, seed: u64) -> Option<Search> {
+/// `search` (0: turning in place), within `time_left` (what the call has left).
+fn stances(search: &Search, radius: f32, time_left: Duration, seed: u64) -> Option<Search> {
     let nav = stance_task(search)?;
     let mut c = search.c.clone();
-    c.time_limit = search.c.time_limit.checked_sub(spent)?;
+    c.time_limit = time_left;
     let mut stances = Search::new(
         search.cfg.clone(),
         search.setup.clone(),
@@ -286,6 +285,14 @@ fn stances(search: &Search, radius: f32, spent: Duration, seed: u64) -> Option<S
     .into_base_move(search);
     stances.stance_radius = Some(radius);
     Some(stances)
+}
+
+/// Adds a stance search's statistics to `into`: its poses as `base_poses`, its path searches
+/// and its time.
+fn add_stances(into: &mut Stats, stances: &Stats) {
+    into.base_poses += stances.points;
+    into.planner_calls += stances.planner_calls;
+    into.time_s += stances.time_s;
 }
 
 /// Whether a base move may help after a failure at `stage`: from elsewhere the robot reaches
