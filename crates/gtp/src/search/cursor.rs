@@ -37,6 +37,11 @@ pub(super) struct Cursor {
     /// and whether it found one for some tool pose there.
     pub(super) ik_misses: usize,
     pub(super) ik_reached: bool,
+    /// Tool poses at the current point for which inverse kinematics found no collision-free
+    /// arm posture (missed, or every posture found collides), and whether it found one for
+    /// some tool pose there.
+    pub(super) ik_failures: usize,
+    pub(super) ik_free: bool,
 }
 
 /// A candidate point where inverse kinematics missed this many tool poses, and reached none,
@@ -44,6 +49,13 @@ pub(super) struct Cursor {
 /// then mostly beyond the wrist's reach, each costing an IK call (one `pick-and-show` of a
 /// random room: 67,638 missed calls at 173 points, 3.3 s).
 pub(super) const MAX_IK_MISSES_AT_POINT: usize = 16;
+
+/// A candidate point where inverse kinematics found no collision-free arm posture for this
+/// many tool poses is left for the next point too: where the arm reaches but collides (a
+/// hand-over pose among furniture), every (grasp, orientation) pair would cost an IK call
+/// (one `pick-and-show` of a random room: 23,699 calls at 513 points, a few points taking
+/// 160 to 527 each; 1.5 s).
+pub(super) const MAX_IK_FAILURES_AT_POINT: usize = 48;
 
 /// A placement of a placing task: an orientation at a point of a level. What the human-related
 /// constraints say of it does not depend on the grasp (the arm returns to where it was).
@@ -99,9 +111,11 @@ impl Cursor {
     }
 
     /// Whether inverse kinematics missed so many tool poses at the current point, and reached
-    /// none, that the point is given up ([`MAX_IK_MISSES_AT_POINT`]).
+    /// none, that the point is given up ([`MAX_IK_MISSES_AT_POINT`]), or found no
+    /// collision-free posture for so many ([`MAX_IK_FAILURES_AT_POINT`]).
     fn point_out_of_reach(&self) -> bool {
-        !self.ik_reached && self.ik_misses >= MAX_IK_MISSES_AT_POINT
+        (!self.ik_reached && self.ik_misses >= MAX_IK_MISSES_AT_POINT)
+            || (!self.ik_free && self.ik_failures >= MAX_IK_FAILURES_AT_POINT)
     }
 
     fn next_grasp(&mut self) {
@@ -271,6 +285,8 @@ impl Search {
         cursor.grasp_ready = false;
         cursor.ik_misses = 0;
         cursor.ik_reached = false;
+        cursor.ik_failures = 0;
+        cursor.ik_free = false;
         self.point_has_placement()
     }
 
@@ -297,5 +313,29 @@ impl Search {
         self.cursor.grasp_ready = true;
         self.cursor.orientation = 0;
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_point_is_given_up_after_its_ik_misses_or_failures_and_kept_once_the_arm_is_free() {
+        let mut c = Cursor {
+            ik_misses: MAX_IK_MISSES_AT_POINT,
+            ik_failures: MAX_IK_MISSES_AT_POINT,
+            ..Cursor::default()
+        };
+        assert!(c.point_out_of_reach(), "missed every tool pose");
+        // The arm reached some tool pose (in collision): misses alone no longer give up.
+        c.ik_reached = true;
+        assert!(!c.point_out_of_reach());
+        c.ik_failures = MAX_IK_FAILURES_AT_POINT;
+        assert!(c.point_out_of_reach(), "no collision-free posture at any");
+        // One collision-free posture there: the point is searched to the end.
+        c.ik_free = true;
+        c.ik_failures = 10 * MAX_IK_FAILURES_AT_POINT;
+        assert!(!c.point_out_of_reach());
     }
 }

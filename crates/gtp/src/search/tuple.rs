@@ -251,10 +251,12 @@ impl Search {
         match r {
             Ok(q) => {
                 self.cursor.ik_reached = true;
+                self.cursor.ik_free = true;
                 Some(q)
             }
             Err(None) => {
                 self.cursor.ik_misses += 1;
+                self.cursor.ik_failures += 1;
                 self.reject(Stage::Ik, || {
                     format!(
                         "no placement of `{oname}` is within the arm's reach (inverse kinematics)"
@@ -264,6 +266,7 @@ impl Search {
             }
             Err(Some(c)) => {
                 self.cursor.ik_reached = true;
+                self.cursor.ik_failures += 1;
                 self.reject(Stage::Ik, || {
                     format!("the arm collides at every placement of `{oname}` ({c})")
                 });
