@@ -21,7 +21,19 @@ use trajectory::{TrajectoryContext, trajectory_json};
 /// A pose as `{"t": [x, y, z], "q": [x, y, z, w]}`.
 pub fn pose_json(p: Pose) -> Value {
     let (t, q) = (p.translation, p.rotation);
-    json!({ "t": [t.x, t.y, t.z], "q": [q.x, q.y, q.z, q.w] })
+    json!({ "t": short3(t), "q": [short(q.x), short(q.y), short(q.z), short(q.w)] })
+}
+
+/// `x` as the shortest decimal that reads back as the same `f32` (`0.85`, where the `f32`
+/// widened to `f64` prints as `0.8500000238418579`): a plan JSON is mostly such numbers, and
+/// half as large so; a reader that parses `f32` gets every number bit for bit.
+pub fn short(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
+/// [`short`] of each coordinate.
+pub fn short3(v: Vector) -> [f64; 3] {
+    [short(v.x), short(v.y), short(v.z)]
 }
 
 /// The pieces of `shape` placed at `pose`, each `{shape, pose}` in the viewer's vocabulary
@@ -36,12 +48,12 @@ pub fn shape_parts(shape: &SharedShape, pose: Pose) -> Vec<Value> {
     }
     let described = if let Some(b) = shape.as_cuboid() {
         let h = b.half_extents;
-        json!({ "box": { "half_extents": [h.x, h.y, h.z] } })
+        json!({ "box": { "half_extents": short3(h) } })
     } else if let Some(c) = shape.as_capsule() {
         let (a, b) = (c.segment.a, c.segment.b);
-        json!({ "capsule": { "a": [a.x, a.y, a.z], "b": [b.x, b.y, b.z], "radius": c.radius } })
+        json!({ "capsule": { "a": short3(a), "b": short3(b), "radius": short(c.radius) } })
     } else if let Some(b) = shape.as_ball() {
-        json!({ "capsule": { "a": [0.0, 0.0, 0.0], "b": [0.0, 0.0, 0.0], "radius": b.radius } })
+        json!({ "capsule": { "a": [0.0, 0.0, 0.0], "b": [0.0, 0.0, 0.0], "radius": short(b.radius) } })
     } else if let Some(c) = shape.as_shape::<Cylinder>() {
         // parry's cylinders stand along y, the viewer's along z: a quarter turn about x.
         let turn = Pose::from_parts(
@@ -49,15 +61,15 @@ pub fn shape_parts(shape: &SharedShape, pose: Pose) -> Vec<Value> {
             Rotation::from_axis_angle(Vector::X, std::f32::consts::FRAC_PI_2),
         );
         return vec![json!({
-            "shape": { "cylinder": { "radius": c.radius, "half_height": c.half_height } },
+            "shape": { "cylinder": { "radius": short(c.radius), "half_height": short(c.half_height) } },
             "pose": pose_json(pose * turn),
         })];
     } else if let Some(m) = shape.as_trimesh() {
-        let v: Vec<[f32; 3]> = m.vertices().iter().map(|p| [p.x, p.y, p.z]).collect();
+        let v: Vec<[f64; 3]> = m.vertices().iter().map(|p| short3(*p)).collect();
         json!({ "mesh": { "vertices": v, "triangles": m.indices() } })
     } else if let Some(m) = shape.as_shape::<ConvexPolyhedron>() {
         let (v, t) = m.to_trimesh();
-        let v: Vec<[f32; 3]> = v.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let v: Vec<[f64; 3]> = v.iter().map(|p| short3(*p)).collect();
         json!({ "mesh": { "vertices": v, "triangles": t } })
     } else {
         // Every shape the scene and URDF loaders build is one of the above; anything else is
@@ -65,7 +77,7 @@ pub fn shape_parts(shape: &SharedShape, pose: Pose) -> Vec<Value> {
         let aabb = shape.compute_local_aabb();
         let (c, h) = (aabb.center(), aabb.half_extents());
         return vec![json!({
-            "shape": { "box": { "half_extents": [h.x, h.y, h.z] } },
+            "shape": { "box": { "half_extents": short3(h) } },
             "pose": pose_json(pose * Pose::from_translation(c)),
         })];
     };
@@ -364,5 +376,22 @@ mod tests {
         assert_eq!(a["pose"]["t"], json!([0.0, 0.0, 0.5]));
         assert_eq!(a["color"], json!([0.5, 0.25, 1.0]));
         assert!(b.get("color").is_none());
+    }
+
+    #[test]
+    fn numbers_are_written_short_and_read_back_as_the_same_f32() {
+        let pose = Pose::from_translation(Vector::new(0.85, -1.01, 1e-7));
+        assert_eq!(
+            serde_json::to_string(&pose_json(pose)["t"]).unwrap(),
+            "[0.85,-1.01,1e-7]"
+        );
+        let mut rng = fastrand::Rng::with_seed(7);
+        for _ in 0..10_000 {
+            let x = f32::from_bits(rng.u32(..));
+            if x.is_finite() {
+                let text = serde_json::to_string(&json!(short(x))).unwrap();
+                assert_eq!(text.parse::<f32>().unwrap(), x, "{text}");
+            }
+        }
     }
 }

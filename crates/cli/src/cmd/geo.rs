@@ -112,7 +112,9 @@ pub fn run_plan(
         print_report(&run);
     }
     if let Some(f) = &out.json_file {
-        std::fs::write(f, serde_json::to_string_pretty(&json)?)
+        // Compact, as `--json` and the benches write it: a plan JSON is data (frames of link
+        // poses), and indented it is three to four times larger.
+        std::fs::write(f, serde_json::to_string(&json)?)
             .with_context(|| format!("writing {}", f.display()))?;
         eprintln!("plan JSON written to {}", f.display());
     }
