@@ -60,20 +60,11 @@ impl ReachTarget {
         }
     }
 
-    /// The reach of person `h` in `world` where they stand now: that of their free hands (an
-    /// arm whose hand holds something takes nothing), of both when neither is free.
+    /// The reach of person `h` in `world` where they stand now.
     pub fn person(world: &World, h: AgentId) -> ReachTarget {
         let state = world.agent_state(h);
-        let all = geometry::effort::shoulders(world, h, state.base, &state.q);
-        let free = free_shoulders(world, h);
-        let shoulders: Vec<Vector> = all
-            .iter()
-            .zip(&free)
-            .filter(|(_, f)| **f)
-            .map(|(s, _)| *s)
-            .collect();
         ReachTarget::Person {
-            shoulders: if shoulders.is_empty() { all } else { shoulders },
+            shoulders: geometry::effort::shoulders(world, h, state.base, &state.q),
             reach: world.agent(h).reach,
         }
     }
@@ -184,32 +175,6 @@ impl ReachTarget {
         out.sort_by(|a, b| (*a - from).length().total_cmp(&(*b - from).length()));
         out
     }
-}
-
-/// Per shoulder link of person `h` (in `shoulder_links` order), whether its arm's hand is free:
-/// no object is attached to a link below the shoulder.
-pub(crate) fn free_shoulders(world: &World, h: AgentId) -> Vec<bool> {
-    let info = world.agent(h);
-    let links = info.model.links();
-    let below = |shoulder: usize, mut l: usize| loop {
-        if l == shoulder {
-            break true;
-        }
-        match links[l].parent {
-            Some(p) => l = p,
-            None => break false,
-        }
-    };
-    info.shoulder_links
-        .iter()
-        .map(|&s| {
-            !world.object_ids().any(|o| {
-                world
-                    .attachment(o)
-                    .is_some_and(|a| a.agent == h && below(s, a.link))
-            })
-        })
-        .collect()
 }
 
 #[cfg(test)]

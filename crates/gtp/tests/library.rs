@@ -947,31 +947,3 @@ fn a_show_behind_a_grille_fails_on_visibility() {
         .unwrap_or_else(|| panic!("no best visibility in: {f}"));
     assert!((0.0..0.9).contains(&best), "{f}");
 }
-
-/// A person's reach for what is handed to them is that of their free hands: with a book in
-/// one hand, only the other arm's shoulder counts.
-#[test]
-fn a_person_holding_a_book_is_reached_at_the_free_hand() {
-    use gtp::target::ReachTarget;
-    let mut w = library();
-    let h = w.agent_id("member").unwrap();
-    let book = w.object_id("grey-book").unwrap();
-    let shoulders = |w: &World| match ReachTarget::person(w, h) {
-        ReachTarget::Person { shoulders, .. } => shoulders,
-        _ => unreachable!("a person's target"),
-    };
-    let both = shoulders(&w);
-    assert_eq!(both.len(), 2);
-    let hand = w.agent(h).hand_links[0];
-    w.attach(book, h, hand);
-    let free = shoulders(&w);
-    assert_eq!(free.len(), 1);
-    // The free shoulder is the one farther from the hand that holds the book.
-    let at = w.agent_state(h).link_poses()[hand].translation;
-    let far = both
-        .iter()
-        .copied()
-        .max_by(|a, b| (*a - at).length().total_cmp(&(*b - at).length()))
-        .unwrap();
-    assert!((free[0] - far).length() < 1e-6);
-}

@@ -9,12 +9,6 @@ use parry3d::query::{Ray, RayCast};
 
 use super::Search;
 
-/// The share of a person's reach within which an object is handed to them: their take puts
-/// the palm against the object, the wrist bent, which the arm does not get to at full stretch
-/// (the bundled person: 0.58 m from shoulder to wrist, the hand 0.12 m beyond it, a reach of
-/// 0.70 m; with the palm facing the shoulder's way, about 0.6 m).
-pub(super) const HAND_OVER_REACH: f32 = 0.85;
-
 impl Search {
     /// Points the human's arms reach from at effort levels 1 up to `level` (the shoulders of
     /// every stance those levels allow, [`perception::reach_origins`]).
@@ -23,22 +17,12 @@ impl Search {
             return Vec::new();
         };
         let mut out = Vec::new();
-        // A hand-over is taken by a free hand: the shoulders of arms that hold something are
-        // left out.
-        let free = if self.task.kind.hands_over() {
-            crate::target::free_shoulders(&self.world, h)
-        } else {
-            vec![true; self.world.agent(h).shoulder_links.len()]
-        };
         for l in 1..=level {
             let world = &self.world;
             let origins = self.human_reach_origins.entry(l).or_insert_with(|| {
                 effort::stances(world, h, l, None)
                     .iter()
                     .flat_map(|st| perception::reach_origins(world, h, st))
-                    .enumerate()
-                    .filter(|(i, _)| free.get(i % free.len().max(1)) != Some(&false))
-                    .map(|(_, o)| o)
                     .collect()
             });
             out.extend(origins.iter().copied());
@@ -48,7 +32,7 @@ impl Search {
 
     /// Whether the human reaches the task's object centred at `p` at effort `level` or lower
     /// (level 0: a hand at the object; 1 and more: within arm's reach of a shoulder of a
-    /// stance the level allows). For a hand-over, within [`HAND_OVER_REACH`] of the reach.
+    /// stance the level allows).
     pub(super) fn human_reaches(&mut self, p: Vector, level: u8) -> bool {
         let Some(h) = self.human else { return false };
         if perception::hand_at(&self.world, h, p, self.object_inner_radius) {
@@ -57,14 +41,8 @@ impl Search {
         if level == 0 {
             return false;
         }
-        let share = if self.task.kind.hands_over() {
-            HAND_OVER_REACH
-        } else {
-            1.0
-        };
-        let reach = self.world.agent(h).reach * share;
         let origins = self.reach_origins_upto(level);
-        origins.iter().any(|o| (*o - p).length() <= reach)
+        perception::within_reach(&self.world, h, &origins, p)
     }
 
     /// Whether the eye may see `p` at effort `level`: inside the field of view (level 0) or the
