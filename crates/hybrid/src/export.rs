@@ -25,8 +25,8 @@ pub fn pose_json(p: Pose) -> Value {
 }
 
 /// `x` as the shortest decimal that reads back as the same `f32` (`0.85`, where the `f32`
-/// widened to `f64` prints as `0.8500000238418579`): a plan JSON is mostly such numbers, and
-/// half as large so; a reader that parses `f32` gets every number bit for bit.
+/// widened to `f64` prints as `0.8500000238418579`): a plan JSON is mostly such numbers
+/// (about a tenth smaller so); a reader that parses `f32` gets every number bit for bit.
 pub fn short(x: f32) -> f64 {
     x.to_string().parse().unwrap_or(f64::from(x))
 }
