@@ -27,12 +27,12 @@ pub fn pose_json(p: Pose) -> Value {
 /// `x` as the shortest decimal that reads back as the same `f32` (`0.85`, where the `f32`
 /// widened to `f64` prints as `0.8500000238418579`): a plan JSON is mostly such numbers
 /// (about a tenth smaller so); a reader that parses `f32` gets every number bit for bit.
-pub fn short(x: f32) -> f64 {
+fn short(x: f32) -> f64 {
     x.to_string().parse().unwrap_or(f64::from(x))
 }
 
 /// [`short`] of each coordinate.
-pub fn short3(v: Vector) -> [f64; 3] {
+fn short3(v: Vector) -> [f64; 3] {
     [short(v.x), short(v.y), short(v.z)]
 }
 
@@ -183,10 +183,10 @@ impl MeshFiles {
             "file": v.path.display().to_string(),
             "source": v.uri,
             "pose": pose_json(v.local_pose),
-            "scale": [v.scale.x, v.scale.y, v.scale.z],
+            "scale": short3(v.scale),
         });
         if let Some(c) = v.colour {
-            out["color"] = json!([c[0], c[1], c[2]]);
+            out["color"] = json!([short(c[0]), short(c[1]), short(c[2])]);
         }
         out
     }
