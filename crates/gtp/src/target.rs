@@ -60,11 +60,21 @@ impl ReachTarget {
         }
     }
 
-    /// The reach of person `h` in `world` where they stand now.
+    /// The reach of person `h` in `world` where they stand now: that of the arms whose hands
+    /// hold nothing (what is handed to them or put down for them is taken by a free hand), of
+    /// both when neither is free.
     pub fn person(world: &World, h: AgentId) -> ReachTarget {
         let state = world.agent_state(h);
+        let all = geometry::effort::shoulders(world, h, state.base, &state.q);
+        let free = free_shoulders(world, h);
+        let shoulders: Vec<Vector> = all
+            .iter()
+            .zip(&free)
+            .filter(|(_, f)| **f)
+            .map(|(s, _)| *s)
+            .collect();
         ReachTarget::Person {
-            shoulders: geometry::effort::shoulders(world, h, state.base, &state.q),
+            shoulders: if shoulders.is_empty() { all } else { shoulders },
             reach: world.agent(h).reach,
         }
     }
@@ -175,6 +185,30 @@ impl ReachTarget {
         out.sort_by(|a, b| (*a - from).length().total_cmp(&(*b - from).length()));
         out
     }
+}
+
+/// Per shoulder link of person `h` (in `shoulder_links` order), whether its arm's hand is free:
+/// no object is attached to a link below the shoulder.
+pub(crate) fn free_shoulders(world: &World, h: AgentId) -> Vec<bool> {
+    let info = world.agent(h);
+    let links = info.model.links();
+    let below = |shoulder: usize, mut l: usize| loop {
+        if l == shoulder {
+            break true;
+        }
+        match links[l].parent {
+            Some(p) => l = p,
+            None => break false,
+        }
+    };
+    let held: Vec<usize> = world
+        .object_ids()
+        .filter_map(|o| world.attachment(o).filter(|a| a.agent == h).map(|a| a.link))
+        .collect();
+    info.shoulder_links
+        .iter()
+        .map(|&s| !held.iter().any(|&l| below(s, l)))
+        .collect()
 }
 
 #[cfg(test)]

@@ -947,3 +947,78 @@ fn a_show_behind_a_grille_fails_on_visibility() {
         .unwrap_or_else(|| panic!("no best visibility in: {f}"));
     assert!((0.0..0.9).contains(&best), "{f}");
 }
+
+/// A person's reach for what is handed to them is that of their free hands: with a book in
+/// one hand, only the other arm's shoulder counts.
+#[test]
+fn a_person_holding_a_book_is_reached_at_the_free_hand() {
+    use gtp::target::ReachTarget;
+    let mut w = library();
+    let h = w.agent_id("member").unwrap();
+    let book = w.object_id("grey-book").unwrap();
+    let shoulders = |w: &World| match ReachTarget::person(w, h) {
+        ReachTarget::Person { shoulders, .. } => shoulders,
+        _ => unreachable!("a person's target"),
+    };
+    let both = shoulders(&w);
+    assert_eq!(both.len(), 2);
+    let hand = w.agent(h).hand_links[0];
+    w.attach(book, h, hand);
+    let free = shoulders(&w);
+    assert_eq!(free.len(), 1);
+    // The free shoulder is the one farther from the hand that holds the book.
+    let at = w.agent_state(h).link_poses()[hand].translation;
+    let far = both
+        .iter()
+        .copied()
+        .max_by(|a, b| (*a - at).length().total_cmp(&(*b - at).length()))
+        .unwrap();
+    assert!((free[0] - far).length() < 1e-6);
+}
+
+/// A give hands the object to a free hand: with a book in one of the member's hands, every
+/// hand-over of the first five solutions lies within reach of the other arm's shoulder.
+#[test]
+fn a_give_offers_the_object_to_the_free_hand() {
+    const TURN: f32 = 1.2;
+    use gtp::target::ReachTarget;
+    let mut w = library();
+    let h = w.agent_id("member").unwrap();
+    let book = w.object_id("grey-book").unwrap();
+    let white = w.object_id("white-book").unwrap();
+    // Turned sideways to the desk, one shoulder nearer the robot than the other.
+    let state = w.agent_state(h).clone();
+    let turn = parry3d::math::Pose::from_rotation(parry3d::math::Rotation::from_rotation_z(TURN));
+    let base = parry3d::math::Pose::from_translation(state.base.translation)
+        * turn
+        * parry3d::math::Pose::from_rotation(state.base.rotation);
+    w.set_agent_config(h, base, &state.q);
+    for hand in w.agent(h).hand_links.clone() {
+        let mut held = w.clone();
+        held.attach(white, h, hand);
+        let ReachTarget::Person { shoulders, reach } = ReachTarget::person(&held, h) else {
+            unreachable!("a person's target")
+        };
+        assert_eq!(shoulders.len(), 1);
+        let planner = Planner::new();
+        let mut stream = planner
+            .run(
+                &held,
+                "give",
+                &["grey-book", "member"],
+                &CallOptions::seeded(3),
+            )
+            .expect("task resolves");
+        let mut solutions = 0;
+        while let Some(s) = stream.next().filter(|_| solutions < 5) {
+            solutions += 1;
+            let at = s.world.object_aabb(book).center();
+            let d = (at - shoulders[0]).length();
+            assert!(
+                d <= reach,
+                "hand-over {d:.3} m from the free shoulder (reach {reach})"
+            );
+        }
+        assert!(solutions > 0, "no give: {:?}", stream.failure());
+    }
+}

@@ -8,13 +8,21 @@ use parry3d::math::Vector;
 use parry3d::query::{Ray, RayCast};
 
 use super::Search;
+use crate::task::TaskKind;
 
 impl Search {
     /// Points the human's arms reach from at effort levels 1 up to `level` (the shoulders of
-    /// every stance those levels allow, [`perception::reach_origins`]).
+    /// every stance those levels allow, [`perception::reach_origins`]). For a give, only the
+    /// shoulders of free hands, as the person's take uses a free hand (both when none is free).
     fn reach_origins_upto(&mut self, level: u8) -> Vec<Vector> {
         let Some(h) = self.human else {
             return Vec::new();
+        };
+        let free = crate::target::free_shoulders(&self.world, h);
+        let keep = |i: usize| {
+            self.task.kind != TaskKind::Give
+                || !free.contains(&true)
+                || free.get(i % free.len().max(1)) == Some(&true)
         };
         let mut out = Vec::new();
         for l in 1..=level {
@@ -23,6 +31,9 @@ impl Search {
                 effort::stances(world, h, l, None)
                     .iter()
                     .flat_map(|st| perception::reach_origins(world, h, st))
+                    .enumerate()
+                    .filter(|(i, _)| keep(*i))
+                    .map(|(_, o)| o)
                     .collect()
             });
             out.extend(origins.iter().copied());
