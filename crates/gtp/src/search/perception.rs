@@ -8,21 +8,13 @@ use parry3d::math::Vector;
 use parry3d::query::{Ray, RayCast};
 
 use super::Search;
-use crate::task::TaskKind;
 
 impl Search {
     /// Points the human's arms reach from at effort levels 1 up to `level` (the shoulders of
-    /// every stance those levels allow, [`perception::reach_origins`]). For a give, only the
-    /// shoulders of free hands, as the person's take uses a free hand (both when none is free).
+    /// every stance those levels allow, [`perception::reach_origins`]).
     fn reach_origins_upto(&mut self, level: u8) -> Vec<Vector> {
         let Some(h) = self.human else {
             return Vec::new();
-        };
-        let free = crate::target::free_shoulders(&self.world, h);
-        let keep = |i: usize| {
-            self.task.kind != TaskKind::Give
-                || !free.contains(&true)
-                || free.get(i % free.len().max(1)) == Some(&true)
         };
         let mut out = Vec::new();
         for l in 1..=level {
@@ -31,9 +23,6 @@ impl Search {
                 effort::stances(world, h, l, None)
                     .iter()
                     .flat_map(|st| perception::reach_origins(world, h, st))
-                    .enumerate()
-                    .filter(|(i, _)| keep(*i))
-                    .map(|(_, o)| o)
                     .collect()
             });
             out.extend(origins.iter().copied());
@@ -43,7 +32,7 @@ impl Search {
 
     /// Whether the human reaches the task's object centred at `p` at effort `level` or lower
     /// (level 0: a hand at the object; 1 and more: within arm's reach of a shoulder of a
-    /// stance the level allows).
+    /// stance the level allows; of a free hand's shoulder while `free_hands_only`).
     pub(super) fn human_reaches(&mut self, p: Vector, level: u8) -> bool {
         let Some(h) = self.human else { return false };
         if perception::hand_at(&self.world, h, p, self.object_inner_radius) {
@@ -52,7 +41,15 @@ impl Search {
         if level == 0 {
             return false;
         }
-        let origins = self.reach_origins_upto(level);
+        let mut origins = self.reach_origins_upto(level);
+        if self.free_hands_only {
+            // Every stance gives the shoulders in `shoulder_links` order.
+            let free = crate::target::free_shoulders(&self.world, h);
+            let n = free.len().max(1);
+            origins = (origins.into_iter().enumerate())
+                .filter_map(|(i, o)| free[i % n].then_some(o))
+                .collect();
+        }
         perception::within_reach(&self.world, h, &origins, p)
     }
 

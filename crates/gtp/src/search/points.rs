@@ -54,7 +54,14 @@ impl Search {
         } else {
             self.surface_grid()
         };
-        let pts = self.reachable_points(raw, level, &robot_shoulders);
+        // A give offers the object within reach of a free hand, which the person's take
+        // uses, where one hand holds something; within reach of either where no point is.
+        self.free_hands_only = kind == TaskKind::Give && self.one_hand_busy();
+        let mut pts = self.reachable_points(raw.clone(), level, &robot_shoulders);
+        if pts.is_empty() && self.free_hands_only {
+            self.free_hands_only = false;
+            pts = self.reachable_points(raw, level, &robot_shoulders);
+        }
         let mut pts = self.best_first(pts, &robot_shoulders);
         pts.truncate(self.c.max_points);
         if pts.is_empty() {
@@ -62,6 +69,13 @@ impl Search {
             self.reject(Stage::Points, || r);
         }
         pts
+    }
+
+    /// Whether the human holds something in some hands but not all.
+    fn one_hand_busy(&self) -> bool {
+        let Some(h) = self.human else { return false };
+        let free = crate::target::free_shoulders(&self.world, h);
+        free.contains(&true) && free.contains(&false)
     }
 
     /// The grid points on the support surfaces a placement may use: the task's support, or
