@@ -143,3 +143,46 @@ fn the_fetch_tucked_posture_is_free_of_self_collision() {
         assert!(hit.is_none(), "lift {lift}: {hit:?}");
     }
 }
+
+/// A MoveIt SRDF as the setup assistant often writes it (the Fetch's): arms given by their
+/// joints, a gripper by its links, an end effector without `parent_group`. The arm is the
+/// group of fewest joints whose chain holds the end effector's `parent_link`, its chain
+/// spans its joints, and the gripper's joint is a finger's (a link brings its parent joint).
+#[test]
+fn groups_of_joints_and_links_and_an_inferred_arm_are_read_as_moveit_reads_them() {
+    let arm: String = [
+        "r_shoulder_pan_joint",
+        "r_shoulder_lift_joint",
+        "r_upper_arm_roll_joint",
+        "r_elbow_flex_joint",
+        "r_forearm_roll_joint",
+        "r_wrist_flex_joint",
+        "r_wrist_roll_joint",
+    ]
+    .iter()
+    .map(|j| format!("<joint name=\"{j}\"/>"))
+    .collect();
+    let srdf = format!(
+        "<robot name=\"pr2\">\n\
+         <group name=\"arm_with_torso\"><joint name=\"torso_lift_joint\"/>{arm}</group>\n\
+         <group name=\"arm\">{arm}</group>\n\
+         <group name=\"gripper\"><link name=\"r_gripper_palm_link\"/>\
+         <link name=\"r_gripper_l_finger_link\"/><link name=\"r_gripper_r_finger_link\"/></group>\n\
+         <end_effector name=\"gripper\" parent_link=\"r_wrist_roll_link\" group=\"gripper\"/>\n\
+         </robot>"
+    );
+    let pr2 = pr2_alone().with_srdf_str(&srdf, "joints.srdf").unwrap();
+    assert_eq!(pr2.arm_names(), ["arm"]);
+    let chain = pr2.chain("arm").unwrap();
+    assert_eq!(pr2.links()[chain.root_link].name, "torso_lift_link");
+    assert_eq!(pr2.links()[chain.tip_link].name, "r_wrist_roll_link");
+    assert_eq!(chain.dofs.len(), 7);
+    assert!(pr2.chain("arm_with_torso").is_ok());
+    let gripper = pr2.semantics().group("gripper").unwrap();
+    assert!(
+        gripper
+            .joints
+            .contains(&"r_gripper_l_finger_joint".to_string())
+    );
+    assert!(gripper.chain.is_none());
+}

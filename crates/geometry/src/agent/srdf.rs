@@ -5,9 +5,10 @@
 //!
 //! Elements read (others are ignored):
 //! * `<group name="..">` with `<chain base_link=".." tip_link=".."/>`, `<joint name=".."/>`,
-//!   `<link name=".."/>`. Groups htngtp gives a meaning to: an **arm** is any group that an
+//!   `<link name=".."/>` (which brings its parent joint, after the joints named, as in MoveIt).
+//!   Groups htngtp gives a meaning to: an **arm** is any group that an
 //!   `end_effector` names as its `parent_group` (its chain runs from the shoulder's parent to the
-//!   tool frame or hand); `head`: a chain whose tip is the eye or camera link, its first two
+//!   tool frame or hand; a group of joints that form a chain is that chain, as in MoveIt); `head`: a chain whose tip is the eye or camera link, its first two
 //!   movable joints pan and tilt; `torso_yaw`, `torso_pitch`, `torso_lift`: one joint each.
 //!   A group's `<group name=".."/>` children are its subgroups (declared groups).
 //! * `<virtual_joint name=".." type="planar|floating|fixed" parent_frame=".." child_link=".."/>`:
@@ -16,7 +17,8 @@
 //!   joint no controller drives (recorded).
 //! * `<end_effector name=".." parent_link=".." group=".." parent_group=".."/>`: the hand or
 //!   gripper of the arm `parent_group` (without one, as MoveIt does: the group whose chain ends
-//!   at `parent_link`); its `group`'s first joint that mimics none is the
+//!   at `parent_link`, else the one with the fewest joints whose chain holds it and none of the
+//!   end effector's joints); its `group`'s first joint that mimics none is the
 //!   gripper's joint (none for a person's hand).
 //! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
 //!   (a mimic joint's value is skipped: it follows its master)
@@ -181,24 +183,46 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
             _ => {}
         }
     }
-    infer_parent_groups(&mut s);
+    infer_parent_groups(&mut s, model);
     cross_check(&src, &root, &s)?;
     Ok(s)
 }
 
-/// An end effector without `parent_group` ends the group whose chain's tip is its
-/// `parent_link`, as MoveIt infers it.
-fn infer_parent_groups(s: &mut Semantics) {
+/// An end effector without `parent_group` ends, as MoveIt infers it, a group whose chain
+/// holds its `parent_link` and none of the end effector's own joints: the one whose chain ends
+/// there, else the one with the fewest joints.
+fn infer_parent_groups(s: &mut Semantics, model: &AgentModel) {
     for i in 0..s.end_effectors.len() {
-        if s.end_effectors[i].parent_group.is_some() {
+        let e = &s.end_effectors[i];
+        if e.parent_group.is_some() {
             continue;
         }
-        let link = &s.end_effectors[i].parent_link;
+        let own: Vec<&String> = s
+            .group(&e.group)
+            .map(|g| g.joints.iter().collect())
+            .unwrap_or_default();
+        let holds = |g: &Group| {
+            let Some((base, tip)) = &g.chain else {
+                return None;
+            };
+            let chain = model.chain_between(base, tip).ok()?;
+            let links = |j: &usize| model.links()[model.joints()[*j].child].name.as_str();
+            let names: Vec<&str> = chain.joints.iter().map(links).collect();
+            let shares = chain
+                .joints
+                .iter()
+                .any(|j| own.contains(&&model.joints()[*j].name));
+            (g.name != e.group
+                && !shares
+                && (tip == &e.parent_link || names.contains(&e.parent_link.as_str())))
+            .then_some((tip != &e.parent_link, chain.dofs.len()))
+        };
         let owner = s
             .groups
             .iter()
-            .find(|g| g.chain.as_ref().is_some_and(|(_, tip)| tip == link))
-            .map(|g| g.name.clone());
+            .filter_map(|g| holds(g).map(|rank| (rank, g.name.clone())))
+            .min()
+            .map(|(_, name)| name);
         s.end_effectors[i].parent_group = owner;
     }
 }
@@ -277,7 +301,48 @@ fn group(
             _ => {}
         }
     }
+    if g.chain.is_none() {
+        g.chain = joints_chain(model, &g.joints);
+    }
+    // As MoveIt reads a group: a link brings its parent joint (after the joints named).
+    for l in &g.links {
+        let parent = model.link(l).ok().and_then(|l| l.parent_joint);
+        if let Some(j) = parent.map(|j| model.joints()[j].name.clone())
+            && !g.joints.contains(&j)
+        {
+            g.joints.push(j);
+        }
+    }
     Ok(g)
+}
+
+/// The chain a group given by its joints spans (MoveIt treats such a group as a chain): from
+/// the parent link of its joint nearest the root to the child link of its deepest joint, when
+/// the group's movable joints are exactly that chain's; `None` otherwise.
+fn joints_chain(model: &AgentModel, joints: &[String]) -> Option<(String, String)> {
+    let ids: Vec<usize> = joints.iter().filter_map(|j| model.joint_id(j)).collect();
+    let depth = |mut l: usize| {
+        let mut d = 0;
+        while let Some(p) = model.links()[l].parent {
+            (d, l) = (d + 1, p);
+        }
+        d
+    };
+    let joint = |j: usize| &model.joints()[j];
+    let top = *ids.iter().min_by_key(|&&j| depth(joint(j).parent))?;
+    let deep = *ids.iter().max_by_key(|&&j| depth(joint(j).child))?;
+    let base = &model.links()[joint(top).parent].name;
+    let tip = &model.links()[joint(deep).child].name;
+    let chain = model.chain_between(base, tip).ok()?;
+    let movable = |v: &mut Vec<usize>| {
+        v.retain(|&j| joint(j).is_movable());
+        v.sort_unstable();
+        v.dedup();
+    };
+    let (mut in_chain, mut in_group) = (chain.joints, ids);
+    movable(&mut in_chain);
+    movable(&mut in_group);
+    (in_chain == in_group).then(|| (base.clone(), tip.clone()))
 }
 
 fn end_effector(src: &Source, e: &Element, model: &AgentModel) -> Result<EndEffector, ModelError> {
