@@ -101,6 +101,8 @@ pub struct JointTrajectory {
     pub waypoints: Option<Vec<Vec<f64>>>,
     /// The gripper joint whose position each point gives, when the trajectory moves a gripper.
     pub gripper_joint: Option<String>,
+    /// Joints that take the gripper joint's position too (fingers each on a joint of its own).
+    pub gripper_followers: Vec<String>,
     pub points: Vec<JointPoint>,
 }
 

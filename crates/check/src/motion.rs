@@ -3,8 +3,8 @@
 //! * continuity: a trajectory starts where the agent's previous trajectory (or the scene's
 //!   `joint_positions`) left each of its joints and its gripper, within [`CONTINUITY_TOLERANCE`];
 //! * kinematics: every frame's link poses are the forward kinematics of the agent's URDF at the
-//!   frame's point (the point's joints, the gripper, and every other joint where it was last
-//!   left), within [`POSITION_TOLERANCE`] and [`ANGLE_TOLERANCE`]; so are the scene's initial
+//!   frame's point (the point's joints, the gripper and the joints that follow it, and every
+//!   other joint where it was last left), within [`POSITION_TOLERANCE`] and [`ANGLE_TOLERANCE`]; so are the scene's initial
 //!   link poses at `joint_positions`.
 //!
 //! Plans without `joint_trajectory`, `urdf` or `joint_positions` (older files) skip the rules
@@ -92,6 +92,9 @@ fn set_point(q: &mut BTreeMap<String, f64>, jt: &JointTrajectory, p: &crate::mod
     }
     if let (Some(name), Some(v)) = (&jt.gripper_joint, p.gripper) {
         q.insert(name.clone(), v);
+        for f in &jt.gripper_followers {
+            q.insert(f.clone(), v);
+        }
     }
 }
 
@@ -105,6 +108,7 @@ fn discontinuity(at: &At, jt: &JointTrajectory, state: &BTreeMap<String, f64>) -
         .collect();
     if let (Some(name), Some(v)) = (&jt.gripper_joint, first.gripper) {
         values.push((name, v));
+        values.extend(jt.gripper_followers.iter().map(|f| (f, v)));
     }
     let jumps: Vec<(&String, f64, f64)> = values
         .into_iter()
@@ -261,5 +265,35 @@ pub(crate) fn iso(p: &Pose) -> Iso {
     Iso {
         q: [r.x, r.y, r.z, r.w].map(f64::from),
         t: [t.x, t.y, t.z].map(f64::from),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::JointPoint;
+
+    /// A point's gripper position drives the gripper joint and the joints that follow it.
+    #[test]
+    fn the_gripper_followers_take_the_gripper_position() {
+        let jt = JointTrajectory {
+            joint_names: vec!["elbow".into()],
+            velocity_limits: vec![1.0],
+            acceleration_limits: vec![1.0],
+            waypoints: None,
+            gripper_joint: Some("l_finger".into()),
+            gripper_followers: vec!["r_finger".into()],
+            points: vec![JointPoint {
+                positions: vec![0.5],
+                velocities: vec![0.0],
+                time: 0.0,
+                gripper: Some(0.03),
+            }],
+        };
+        let mut q = BTreeMap::new();
+        set_point(&mut q, &jt, &jt.points[0]);
+        assert_eq!(q.get("elbow"), Some(&0.5));
+        assert_eq!(q.get("l_finger"), Some(&0.03));
+        assert_eq!(q.get("r_finger"), Some(&0.03));
     }
 }

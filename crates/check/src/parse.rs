@@ -462,6 +462,9 @@ fn joint_trajectory(n: Node) -> Res<JointTrajectory> {
         acceleration_limits,
         waypoints,
         gripper_joint: n.opt("gripper_joint", |n| n.str())?,
+        gripper_followers: n
+            .opt("gripper_followers", |n| n.array(|n| n.str()))?
+            .unwrap_or_default(),
         points,
     })
 }

@@ -100,12 +100,12 @@ impl GripperModel {
         model: &AgentModel,
         arm: &str,
         tool_link: usize,
-        dof: Option<usize>,
+        (dof, followers): (Option<usize>, &[usize]),
     ) -> GripperModel {
         let links = effector_links(model, arm, tool_link);
         let root = common_root(model, &links, tool_link);
         let q = model.default_configuration().into_vec();
-        let path = |link: usize| joint_path(model, root, link, dof, &q);
+        let path = |link: usize| joint_path(model, root, link, (dof, followers), &q);
         let boxes = links
             .iter()
             .map(|&l| GripperLink {
@@ -148,12 +148,13 @@ impl GripperModel {
     /// that mimics none, as the planner's [`crate::robot::RobotSetup`] reads them.
     pub fn of_named_arm(model: &AgentModel, arm: &str) -> Result<GripperModel, String> {
         let chain = model.chain(arm).map_err(|e| e.to_string())?;
-        let sem = model.semantics();
-        let dof = sem
-            .end_effector(arm)
-            .and_then(|e| sem.group(&e.group))
-            .and_then(|g| g.joints.iter().find_map(|j| model.dof_index(j).ok()));
-        Ok(GripperModel::of_arm(model, arm, chain.tip_link, dof))
+        let (dof, followers) = finger_dofs(model, arm);
+        Ok(GripperModel::of_arm(
+            model,
+            arm,
+            chain.tip_link,
+            (dof, &followers),
+        ))
     }
 
     /// The boxes (in the tool frame) with the jaws `opening` metres apart, clamped to the
@@ -335,11 +336,37 @@ fn common_root(model: &AgentModel, links: &[usize], tool_link: usize) -> usize {
 }
 
 /// The joints from `root` down to `link`, each with how the opening sets its value.
+/// The finger joints of arm `arm`'s end effector: the gripper's joint, the first of its group
+/// that mimics none (none for a person's hand), and the others that mimic none with its kind
+/// and limits, which move with it (fingers each on a joint of its own, as the Fetch's).
+pub fn finger_dofs(model: &AgentModel, arm: &str) -> (Option<usize>, Vec<usize>) {
+    let sem = model.semantics();
+    let Some(g) = sem.end_effector(arm).and_then(|e| sem.group(&e.group)) else {
+        return (None, Vec::new());
+    };
+    let dofs: Vec<usize> = g
+        .joints
+        .iter()
+        .filter_map(|j| model.dof_index(j).ok())
+        .collect();
+    let Some(&first) = dofs.first() else {
+        return (None, Vec::new());
+    };
+    let kind = |k: usize| model.joints()[model.dof_joint(k)].kind;
+    let limits = model.dof_limits();
+    let followers = dofs[1..]
+        .iter()
+        .copied()
+        .filter(|&k| k != first && kind(k) == kind(first) && limits[k] == limits[first])
+        .collect();
+    (Some(first), followers)
+}
+
 fn joint_path(
     model: &AgentModel,
     root: usize,
     link: usize,
-    dof: Option<usize>,
+    (dof, followers): (Option<usize>, &[usize]),
     q: &[f32],
 ) -> Vec<PathJoint> {
     let mut path = Vec::new();
@@ -351,7 +378,7 @@ fn joint_path(
         let joint = &model.joints()[j];
         let master = joint.mimic.map(|m| (model.joints()[m.master].dof, m));
         let (multiplier, offset) = match (joint.dof, master) {
-            (Some(d), _) if Some(d) == dof => (1.0, 0.0),
+            (Some(d), _) if Some(d) == dof || followers.contains(&d) => (1.0, 0.0),
             (_, Some((Some(d), m))) if Some(d) == dof => (m.multiplier, m.offset),
             _ => (0.0, model.joint_value(j, q)),
         };
@@ -468,6 +495,44 @@ pub(crate) mod tests {
 
     fn close(a: Vector, b: Vector) -> bool {
         (a - b).abs().max_element() < 1e-5
+    }
+
+    /// Fingers each on a joint of its own (the Fetch's), the SRDF's gripper group naming
+    /// both: the second follows the first, and the gripper's boxes are those of the same
+    /// gripper whose second finger mimics the first.
+    #[test]
+    fn a_second_finger_on_its_own_joint_moves_with_the_first() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/");
+        let urdf = std::fs::read_to_string(format!("{dir}pr2.urdf")).unwrap();
+        let mimic = r#"<mimic joint="r_gripper_l_finger_joint" multiplier="1" offset="0"/>"#;
+        assert!(urdf.contains(mimic));
+        let own = AgentModel::from_urdf_str(&urdf.replace(mimic, ""), "pr2.urdf")
+            .and_then(|m| m.with_srdf_file(format!("{dir}pr2.srdf")))
+            .unwrap();
+        let (dof, followers) = finger_dofs(&own, "right_arm");
+        let name = |k: usize| own.dof_names()[k].as_str();
+        assert_eq!(dof.map(name), Some("r_gripper_l_finger_joint"));
+        assert_eq!(
+            followers.iter().map(|&k| name(k)).collect::<Vec<_>>(),
+            ["r_gripper_r_finger_joint"]
+        );
+        let (a, b) = (
+            GripperModel::of_named_arm(&own, "right_arm").unwrap(),
+            pr2_gripper(),
+        );
+        for opening in [0.02, 0.06, 0.09] {
+            let (a, b) = (a.at(opening), b.at(opening));
+            assert_eq!(a.boxes.len(), b.boxes.len());
+            for ((pa, ca), (pb, cb)) in a.boxes.iter().zip(&b.boxes) {
+                assert!(
+                    close(pa.translation, pb.translation),
+                    "{opening}: {pa:?} {pb:?}"
+                );
+                assert!(close(ca.half_extents, cb.half_extents));
+            }
+        }
+        // With the mimic, no follower.
+        assert!(finger_dofs(&model("pr2"), "right_arm").1.is_empty());
     }
 
     #[test]

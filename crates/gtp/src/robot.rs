@@ -33,6 +33,8 @@ pub struct Arm {
     /// The configuration index of the gripper's finger joint (each finger's travel: half the
     /// jaw opening), if the model has one.
     pub gripper_dof: Option<usize>,
+    /// Finger joints that move with `gripper_dof` (each finger on a joint of its own).
+    pub gripper_followers: Vec<usize>,
     /// The gripper's boxes, from the robot's model, for the cheap pre-checks.
     pub gripper: GripperModel,
     /// Joint space of the chain's movable joints.
@@ -127,13 +129,9 @@ impl RobotSetup {
                 continue;
             };
             let (chain, tool_link) = tool_chain(&model, chain, &world.agent(agent).hand_links);
-            // The gripper's joint: the first joint of the arm's end-effector group that mimics
-            // none (a person's hand has none).
-            let gripper_dof = model
-                .semantics()
-                .end_effector(&name)
-                .and_then(|e| model.semantics().group(&e.group))
-                .and_then(|g| g.joints.iter().find_map(|j| model.dof_index(j).ok()));
+            // The gripper's joint (a person's hand has none) and the fingers' joints moving with
+            // it.
+            let (gripper_dof, gripper_followers) = crate::gripper::finger_dofs(&model, &name);
             let limits = model.dof_limits();
             let space = JointSpace::new(
                 &chain
@@ -180,7 +178,8 @@ impl RobotSetup {
             } else {
                 (0.0, f32::INFINITY)
             };
-            let gripper = GripperModel::of_arm(&model, &name, tool_link, gripper_dof);
+            let gripper =
+                GripperModel::of_arm(&model, &name, tool_link, (gripper_dof, &gripper_followers));
             arms.push(Arm {
                 gripper,
                 wrist_to_tool,
@@ -190,6 +189,7 @@ impl RobotSetup {
                 chain,
                 tool_link,
                 gripper_dof,
+                gripper_followers,
                 space,
                 joint_names,
             });
@@ -301,6 +301,9 @@ pub fn set_arm_values(arm: &Arm, q: &mut [f32], values: &[f32]) {
 pub fn set_opening(model: &AgentModel, arm: &Arm, q: &mut [f32], opening: f32) {
     if let Some(k) = arm.gripper_dof {
         q[k] = model.dof_limits()[k].clamp(arm.gripper.joint_value(opening));
+        for &f in &arm.gripper_followers {
+            q[f] = q[k];
+        }
     }
 }
 

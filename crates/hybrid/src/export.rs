@@ -263,9 +263,11 @@ pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptio
                     let fingers: Vec<(geometry::scene::AgentId, usize, f32)> = robot
                         .iter()
                         .flat_map(|r| {
-                            r.arms.iter().filter_map(|a| {
-                                a.gripper_dof
-                                    .map(|k| (r.agent, k, world.agent_state(r.agent).q[k]))
+                            r.arms.iter().flat_map(|a| {
+                                let fingers =
+                                    a.gripper_dof.into_iter().chain(a.gripper_followers.clone());
+                                let q = &world.agent_state(r.agent).q;
+                                fingers.map(|k| (r.agent, k, q[k])).collect::<Vec<_>>()
                             })
                         })
                         .collect();

@@ -209,7 +209,7 @@ pub fn trajectory_json(
         .map(|(a, k)| {
             let from = world.agent_state(agent).q[k];
             let to = model.dof_limits()[k].clamp(a.gripper.joint_value(t.gripper_opening));
-            (k, from, to)
+            (k, from, to, a.gripper_followers.as_slice())
         });
     let holding = t.held.as_ref().map(|h| h.object.clone());
     let steps = GRIPPER_POINTS.min(points.len().saturating_sub(1)).max(1);
@@ -218,9 +218,12 @@ pub fn trajectory_json(
         let state = world.agent_state(agent);
         let (mut base, mut q) = (state.base, state.q.clone());
         let mut gripper_position = Value::Null;
-        if let Some((k, from, to)) = gripper {
+        if let Some((k, from, to, followers)) = gripper {
             let s = (j as f32 / steps as f32).min(1.0);
             q[k] = from + (to - from) * s;
+            for &f in followers {
+                q[f] = q[k];
+            }
             gripper_position = json!(q[k]);
         }
         base = set_point(&model, &t.joints, &p.positions, base, &mut q);
@@ -248,9 +251,15 @@ pub fn trajectory_json(
             tracker.set(&t.agent, joint, *v);
         }
     }
-    let gripper_joint = gripper.map(|(k, _, _)| model.dof_names()[k].clone());
-    if let (Some((k, _, _)), Some(name)) = (gripper, &gripper_joint) {
-        tracker.set(&t.agent, name, f64::from(world.agent_state(agent).q[k]));
+    let gripper_joint = gripper.map(|(k, ..)| model.dof_names()[k].clone());
+    let followers: Vec<String> = gripper
+        .map(|(.., f)| f.iter().map(|&k| model.dof_names()[k].clone()).collect())
+        .unwrap_or_default();
+    if let (Some((k, ..)), Some(name)) = (gripper, &gripper_joint) {
+        let v = f64::from(world.agent_state(agent).q[k]);
+        for joint in std::iter::once(name).chain(&followers) {
+            tracker.set(&t.agent, joint, v);
+        }
     }
     let value = json!({
         "agent": t.agent,
@@ -262,6 +271,7 @@ pub fn trajectory_json(
             "group": t.arm,
             "joint_names": t.joints,
             "gripper_joint": gripper_joint,
+            "gripper_followers": followers,
             "velocity_limits": velocity,
             "acceleration_limits": acceleration,
             "waypoints": waypoints,
