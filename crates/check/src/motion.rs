@@ -4,8 +4,8 @@
 //!   `joint_positions`) left each of its joints and its gripper, within [`CONTINUITY_TOLERANCE`];
 //! * kinematics: every frame's link poses are the forward kinematics of the agent's URDF at the
 //!   frame's point (the point's joints, the gripper and the joints that follow it, and every
-//!   other joint where it was last left), within [`POSITION_TOLERANCE`] and [`ANGLE_TOLERANCE`]; so are the scene's initial
-//!   link poses at `joint_positions`.
+//!   other joint where it was last left), within [`POSITION_TOLERANCE`] and
+//!   [`ANGLE_TOLERANCE`]; so are the scene's initial link poses at `joint_positions`.
 //!
 //! Plans without `joint_trajectory`, `urdf` or `joint_positions` (older files) skip the rules
 //! they cannot apply.

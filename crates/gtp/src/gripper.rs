@@ -335,7 +335,6 @@ fn common_root(model: &AgentModel, links: &[usize], tool_link: usize) -> usize {
     }
 }
 
-/// The joints from `root` down to `link`, each with how the opening sets its value.
 /// The finger joints of arm `arm`'s end effector: the gripper's joint, the first of its group
 /// that mimics none (none for a person's hand), and the others that mimic none with its kind
 /// and limits, which move with it (fingers each on a joint of its own, as the Fetch's).
@@ -362,6 +361,8 @@ pub fn finger_dofs(model: &AgentModel, arm: &str) -> (Option<usize>, Vec<usize>)
     (Some(first), followers)
 }
 
+/// The joints from `root` down to `link`, each with how the opening sets its value (the
+/// gripper's joint and its followers the opening's, their mimics in proportion).
 fn joint_path(
     model: &AgentModel,
     root: usize,

@@ -5,11 +5,12 @@
 //!
 //! Elements read (others are ignored):
 //! * `<group name="..">` with `<chain base_link=".." tip_link=".."/>`, `<joint name=".."/>`,
-//!   `<link name=".."/>` (which brings its parent joint, after the joints named, as in MoveIt).
-//!   Groups htngtp gives a meaning to: an **arm** is any group that an
-//!   `end_effector` names as its `parent_group` (its chain runs from the shoulder's parent to the
-//!   tool frame or hand; a group of joints that form a chain is that chain, as in MoveIt); `head`: a chain whose tip is the eye or camera link, its first two
-//!   movable joints pan and tilt; `torso_yaw`, `torso_pitch`, `torso_lift`: one joint each.
+//!   `<link name=".."/>` (which brings its parent joint, after the joints named, as in
+//!   MoveIt). Groups htngtp gives a meaning to: an **arm** is any group that an `end_effector`
+//!   names as its `parent_group` (its chain runs from the shoulder's parent to the tool frame or
+//!   hand; a group of joints that form a chain is that chain, as in MoveIt); `head`: a chain
+//!   whose tip is the eye or camera link, its first two movable joints pan and tilt;
+//!   `torso_yaw`, `torso_pitch`, `torso_lift`: one joint each.
 //!   A group's `<group name=".."/>` children are its subgroups (declared groups).
 //! * `<virtual_joint name=".." type="planar|floating|fixed" parent_frame=".." child_link=".."/>`:
 //!   how the root link is placed in the world (the scene places it: htngtp's base is planar);
@@ -19,7 +20,8 @@
 //!   gripper of the arm `parent_group` (without one, as MoveIt does: the group whose chain ends
 //!   at `parent_link`, else the one with the fewest joints whose chain holds it and none of the
 //!   end effector's joints); its `group`'s first joint that mimics none is the
-//!   gripper's joint (none for a person's hand).
+//!   gripper's joint (none for a person's hand), and the others that mimic none with its kind
+//!   and limits follow it (fingers each on a joint of its own).
 //! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
 //!   (a mimic joint's value is skipped: it follows its master)
 //!   (`standing` for a person who may stand up, the effort level that allows it).
