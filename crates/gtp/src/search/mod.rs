@@ -221,9 +221,9 @@ pub(crate) struct Search {
     verdicts: HashMap<PlacementKey, Verdict>,
     /// Per level: the points the human's arms reach from at that level, computed lazily.
     human_reach_origins: HashMap<u8, Vec<Vector>>,
-    /// A give's candidate points are within reach of the human's free hands only (see
-    /// `Search::candidate_points`).
-    free_hands_only: bool,
+    /// While a give's candidate points must be within reach of the human's free hands: per
+    /// shoulder link, whether its hand is free (see `Search::candidate_points`).
+    free_hands_only: Option<Vec<bool>>,
     /// The robot's arms left out of the choices because their grippers hold something else.
     busy_arms: Vec<String>,
     rejections: Rejections,
@@ -302,7 +302,7 @@ impl Search {
             motions: HashMap::new(),
             verdicts: HashMap::new(),
             human_reach_origins: HashMap::new(),
-            free_hands_only: false,
+            free_hands_only: None,
             busy_arms: grasps.busy_arms,
             rejections: Rejections::default(),
             failure: None,

@@ -42,9 +42,8 @@ impl Search {
             return false;
         }
         let mut origins = self.reach_origins_upto(level);
-        if self.free_hands_only {
+        if let Some(free) = &self.free_hands_only {
             // Every stance gives the shoulders in `shoulder_links` order.
-            let free = crate::target::free_shoulders(&self.world, h);
             let n = free.len().max(1);
             origins = (origins.into_iter().enumerate())
                 .filter_map(|(i, o)| free[i % n].then_some(o))

@@ -56,10 +56,12 @@ impl Search {
         };
         // A give offers the object within reach of a free hand, which the person's take
         // uses, where one hand holds something; within reach of either where no point is.
-        self.free_hands_only = kind == TaskKind::Give && self.one_hand_busy();
+        self.free_hands_only = self.human.filter(|_| kind == TaskKind::Give).and_then(|h| {
+            let free = crate::target::free_shoulders(&self.world, h);
+            (free.contains(&true) && free.contains(&false)).then_some(free)
+        });
         let mut pts = self.reachable_points(raw.clone(), level, &robot_shoulders);
-        if pts.is_empty() && self.free_hands_only {
-            self.free_hands_only = false;
+        if pts.is_empty() && self.free_hands_only.take().is_some() {
             pts = self.reachable_points(raw, level, &robot_shoulders);
         }
         let mut pts = self.best_first(pts, &robot_shoulders);
@@ -69,13 +71,6 @@ impl Search {
             self.reject(Stage::Points, || r);
         }
         pts
-    }
-
-    /// Whether the human holds something in some hands but not all.
-    fn one_hand_busy(&self) -> bool {
-        let Some(h) = self.human else { return false };
-        let free = crate::target::free_shoulders(&self.world, h);
-        free.contains(&true) && free.contains(&false)
     }
 
     /// The grid points on the support surfaces a placement may use: the task's support, or
