@@ -34,7 +34,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::Pose;
+use parry3d::math::{Pose, Vector};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query;
 use parry3d::shape::{Shape, SharedShape};
@@ -42,6 +42,7 @@ use parry3d::shape::{Shape, SharedShape};
 use crate::agent::{AgentModel, ModelError};
 
 mod self_collision;
+mod warm_gjk;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
 
 /// One piece of static scene geometry.
@@ -355,6 +356,7 @@ struct Scratch {
     poses: Vec<Pose>,
     aabbs: Vec<Aabb>,
     candidates: Vec<u32>,
+    hints: warm_gjk::HintCache,
 }
 
 thread_local! {
@@ -683,6 +685,7 @@ impl CollisionChecker {
                 poses,
                 aabbs,
                 candidates,
+                hints,
             } = &mut *guard;
             let model = &self.agent.model;
             let shapes = &self.agent.shapes;
@@ -725,6 +728,13 @@ impl CollisionChecker {
                     (&self.agent.all_shapes, &self.agent.groups)
                 }
             };
+            let n_obstacles = self.obstacles.len();
+            let key = (
+                Arc::as_ptr(&self.agent) as usize,
+                Arc::as_ptr(&self.obstacles) as usize,
+            );
+            let hints = hints.get(key, shapes.len() * n_obstacles, self.agent.pairs.len());
+            let mut spare = Vector::ZERO;
             // Agent against the scene: first the obstacles near the moving shapes, then per shape.
             if !self.obstacles.is_empty() && !moving.is_empty() {
                 let mut all = aabbs[moving[0] as usize];
@@ -739,8 +749,12 @@ impl CollisionChecker {
                     for &o in candidates.iter() {
                         let o = o as usize;
                         let obstacle = &self.obstacles.obstacles[o];
+                        let hint = hints
+                            .obstacle
+                            .get_mut(i * n_obstacles + o)
+                            .unwrap_or(&mut spare);
                         if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
-                            && s.hits(&poses[i], &*obstacle.shape.0, &obstacle.pose)
+                            && s.hits_warm(&poses[i], &*obstacle.shape.0, &obstacle.pose, hint)
                             && report(Hit::Obstacle(i, o))
                         {
                             return;
@@ -758,7 +772,11 @@ impl CollisionChecker {
                     if d.length_squared() > (ra + rb) * (ra + rb) {
                         continue;
                     }
-                    for &(a, b) in &pairs[g.start as usize..g.end as usize] {
+                    let range = g.start as usize..g.end as usize;
+                    for (&(a, b), hint) in pairs[range.clone()]
+                        .iter()
+                        .zip(&mut hints.self_pairs[range])
+                    {
                         let (a, b) = (a as usize, b as usize);
                         let r = shapes[a].radius + shapes[b].radius;
                         if (poses[a].translation - poses[b].translation).length_squared() > r * r {
@@ -767,7 +785,7 @@ impl CollisionChecker {
                         if !aabb_overlap(&aabbs[a], &aabbs[b]) {
                             continue;
                         }
-                        if shapes[a].hits_shape(&poses[a], &shapes[b], &poses[b])
+                        if shapes[a].hits_shape_warm(&poses[a], &shapes[b], &poses[b], hint)
                             && report(Hit::SelfPair(a, b))
                         {
                             return;

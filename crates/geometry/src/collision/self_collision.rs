@@ -7,9 +7,10 @@ use std::sync::Arc;
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
-use parry3d::shape::{Cuboid, Shape, SharedShape};
+use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::intersects;
+use super::warm_gjk::{CLIMB_ABOVE, ClimbingHull, gjk_warm, hint_separates};
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -109,6 +110,8 @@ pub(super) struct ShapeEntry {
     /// For a shape costly to test (a convex polyhedron, whose support function visits every
     /// vertex): its bounding box in its own frame, tested first (see [`ShapeEntry::hits`]).
     pub(super) bounds: Option<(Pose, Cuboid)>,
+    /// For a polyhedron of many vertices: its support by hill climbing (see [`ClimbingHull`]).
+    climb: Option<Arc<ClimbingHull>>,
 }
 
 impl ShapeEntry {
@@ -120,12 +123,17 @@ impl ShapeEntry {
                 Cuboid::new(aabb.half_extents() + Vector::splat(BOUNDS_MARGIN)),
             )
         });
+        let climb = shape
+            .as_convex_polyhedron()
+            .filter(|hull| hull.points().len() > CLIMB_ABOVE)
+            .map(|hull| Arc::new(ClimbingHull::new(hull)));
         ShapeEntry {
             link,
             local_pose,
             shape,
             radius,
             bounds,
+            climb,
         }
     }
 
@@ -150,6 +158,62 @@ impl ShapeEntry {
             return false;
         }
         intersects(pose, &*self.shape.0, other_pose, other)
+    }
+
+    /// The shape's support function, where it has one: the climbing one for a large hull.
+    fn support(&self) -> Option<&dyn SupportMap> {
+        match &self.climb {
+            Some(climb) => Some(&**climb),
+            None => self.shape.as_support_map(),
+        }
+    }
+
+    /// The shape's bounding box at `pose` as a support map, or the shape where it has none.
+    fn bound<'a>(&'a self, pose: &Pose, exact: &'a dyn SupportMap) -> (Pose, &'a dyn SupportMap) {
+        match &self.bounds {
+            Some((at, cuboid)) => (*pose * *at, cuboid),
+            None => (*pose, exact),
+        }
+    }
+
+    /// [`ShapeEntry::hits`] warm-started by `hint`, the pair's last separating direction
+    /// (see [`super::warm_gjk`]): the hint's plane, then the bounding box, then the exact
+    /// shapes. Exact whatever the hint; updates it where the shapes are apart.
+    pub(super) fn hits_warm(
+        &self,
+        pose: &Pose,
+        other: &dyn Shape,
+        other_pose: &Pose,
+        hint: &mut Vector,
+    ) -> bool {
+        let (Some(a), Some(b)) = (self.support(), other.as_support_map()) else {
+            return self.hits(pose, other, other_pose);
+        };
+        if hint_separates(*hint, pose, a, other_pose, b) {
+            return false;
+        }
+        let (box_pose, bounds) = self.bound(pose, a);
+        (self.bounds.is_none() || gjk_warm(&box_pose, bounds, other_pose, b, hint))
+            && gjk_warm(pose, a, other_pose, b, hint)
+    }
+
+    /// [`ShapeEntry::hits_shape`] warm-started by `hint` as [`ShapeEntry::hits_warm`] is.
+    pub(super) fn hits_shape_warm(
+        &self,
+        pose: &Pose,
+        other: &ShapeEntry,
+        other_pose: &Pose,
+        hint: &mut Vector,
+    ) -> bool {
+        let (Some(a), Some(b)) = (self.support(), other.support()) else {
+            return self.hits_shape(pose, other, other_pose);
+        };
+        if hint_separates(*hint, pose, a, other_pose, b) {
+            return false;
+        }
+        let boxed = self.bounds.is_some() || other.bounds.is_some();
+        let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
+        (!boxed || gjk_warm(&pa, ba, &pb, bb, hint)) && gjk_warm(pose, a, other_pose, b, hint)
     }
 
     /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.
