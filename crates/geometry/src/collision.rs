@@ -356,6 +356,8 @@ struct Scratch {
     poses: Vec<Pose>,
     aabbs: Vec<Aabb>,
     candidates: Vec<u32>,
+    /// World centres of the links' bounding spheres.
+    centres: Vec<Vector>,
     hints: warm_gjk::HintCache,
 }
 
@@ -685,6 +687,7 @@ impl CollisionChecker {
                 poses,
                 aabbs,
                 candidates,
+                centres,
                 hints,
             } = &mut *guard;
             let model = &self.agent.model;
@@ -766,9 +769,11 @@ impl CollisionChecker {
             if self.self_collision {
                 let spheres = &self.agent.link_spheres;
                 let pairs = &self.agent.pairs;
+                centres.clear();
+                centres.extend(links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
                 for g in groups {
-                    let ((ca, ra), (cb, rb)) = (spheres[g.a as usize], spheres[g.b as usize]);
-                    let d = links[g.a as usize] * ca - links[g.b as usize] * cb;
+                    let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
+                    let d = centres[g.a as usize] - centres[g.b as usize];
                     if d.length_squared() > (ra + rb) * (ra + rb) {
                         continue;
                     }
