@@ -332,21 +332,12 @@ impl SelfCollisionModel {
                 status[key(a, b)] = Some(AllowedReason::Default);
             }
         }
-        let mut counts = vec![0usize; candidate_links.len()];
-        let mut rng = fastrand::Rng::with_seed(options.seed);
-        for _ in 0..options.samples {
-            let q = model.random_configuration(&mut rng);
-            link_pairs_colliding(q.as_slice(), &mut poses, &mut hits);
-            for (c, &h) in counts.iter_mut().zip(&hits) {
-                *c += h as usize;
-            }
-        }
-        if options.samples > 0 {
-            for (k, &(a, b)) in candidate_links.iter().enumerate() {
-                let fraction = counts[k] as f32 / options.samples as f32;
-                if status[key(a, b)].is_none() && fraction >= options.always_fraction {
-                    status[key(a, b)] = Some(AllowedReason::Always);
-                }
+        let always = always_colliding(&model, &candidate_links, options, |poses, a, b| {
+            links_collide(&shapes, &by_link, poses, a, b)
+        });
+        for (k, &(a, b)) in candidate_links.iter().enumerate() {
+            if always[k] && status[key(a, b)].is_none() {
+                status[key(a, b)] = Some(AllowedReason::Always);
             }
         }
         // Pairs whose relative pose depends on at most one degree of freedom: sweep it.
@@ -462,6 +453,50 @@ impl SelfCollisionModel {
             (la == a && lb == b) || (la == b && lb == a)
         }))
     }
+}
+
+/// Which of the pairs of links `candidates` collide in at least `options.always_fraction` of
+/// `options.samples` random configurations. A pair is no longer tested once it has missed in
+/// too many samples to reach the fraction, which settles most pairs in a few dozen samples;
+/// the answer is that of testing every pair in every sample.
+fn always_colliding(
+    model: &AgentModel,
+    candidates: &[(usize, usize)],
+    options: &SelfCollisionOptions,
+    collide: impl Fn(&[Pose], usize, usize) -> bool,
+) -> Vec<bool> {
+    let n = options.samples;
+    if n == 0 {
+        return vec![false; candidates.len()];
+    }
+    let can_reach = |misses: usize| (n - misses) as f32 / n as f32 >= options.always_fraction;
+    let (mut counts, mut misses) = (
+        vec![0usize; candidates.len()],
+        vec![0usize; candidates.len()],
+    );
+    let mut rng = fastrand::Rng::with_seed(options.seed);
+    let mut poses = Vec::new();
+    for _ in 0..n {
+        if !misses.iter().any(|&m| can_reach(m)) {
+            break;
+        }
+        let q = model.random_configuration(&mut rng);
+        model.link_poses_into(Pose::IDENTITY, q.as_slice(), &mut poses);
+        for (k, &(a, b)) in candidates.iter().enumerate() {
+            if can_reach(misses[k]) {
+                if collide(&poses, a, b) {
+                    counts[k] += 1;
+                } else {
+                    misses[k] += 1;
+                }
+            }
+        }
+    }
+    counts
+        .iter()
+        .zip(&misses)
+        .map(|(&c, &m)| can_reach(m) && c as f32 / n as f32 >= options.always_fraction)
+        .collect()
 }
 
 /// Whether links `a` and `b` (their shapes, `by_link` indices into `shapes`) collide with the
