@@ -40,6 +40,7 @@ use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
 pub mod convex;
+mod convex_cache;
 pub mod frames;
 mod loader;
 pub mod packages;

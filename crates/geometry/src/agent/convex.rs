@@ -9,7 +9,7 @@
 //! U-shaped link. Any other mesh (open, or filling its hull well) collides as its hull, the
 //! usual practice of MoveIt and of physics engines. A scene overrides the rule per link
 //! (`hull_links`, `decompose_links`). Results are cached in memory per file, scale and mode for
-//! the life of the process.
+//! the life of the process, and on disk between runs (see `convex_cache`).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -19,6 +19,7 @@ use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
 use parry3d::transformation::vhacd::VHACDParameters;
 
+use super::convex_cache;
 use crate::mesh_file;
 
 /// A closed mesh filling less than this fraction of its hull is decomposed ([`ConvexMode::Auto`]).
@@ -46,6 +47,8 @@ pub struct ConvexPiece {
     pub shape: SharedShape,
     /// Radius of the sphere about `centre` that holds the piece.
     pub radius: f32,
+    /// The points `shape` is the hull of (relative to `centre`), as the disk cache keeps them.
+    pub points: Vec<Vector>,
 }
 
 /// A mesh file as convex pieces, with what the rule measured.
@@ -75,8 +78,21 @@ pub fn convex_mesh(
     if let Some(found) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
         return Ok(found.clone());
     }
-    let mesh = mesh_file::read_mesh(path)?;
-    let made = Arc::new(guarded_convex(&mesh, scale, mode)?);
+    // The disk cache, where there is one and the file reads.
+    let disk = convex_cache::folder().zip(std::fs::read(path).ok());
+    let found = disk
+        .as_ref()
+        .and_then(|(dir, bytes)| convex_cache::load(dir, bytes, scale, mode));
+    let made = match found {
+        Some(found) => Arc::new(found),
+        None => {
+            let made = guarded_convex(&mesh_file::read_mesh(path)?, scale, mode)?;
+            if let Some((dir, bytes)) = &disk {
+                convex_cache::store(dir, bytes, scale, mode, &made);
+            }
+            Arc::new(made)
+        }
+    };
     cache
         .lock()
         .unwrap_or_else(|e| e.into_inner())
@@ -151,13 +167,18 @@ fn centred(shape: &SharedShape) -> Option<ConvexPiece> {
     let poly = shape.as_convex_polyhedron()?;
     let aabb = shape.compute_local_aabb();
     let centre = aabb.center();
-    let moved: Vec<Vector> = poly.points().iter().map(|p| *p - centre).collect();
-    let radius = moved.iter().map(|p| p.length()).fold(0.0, f32::max);
-    let shape = SharedShape::convex_hull(&moved)?;
+    piece(centre, poly.points().iter().map(|p| *p - centre).collect())
+}
+
+/// The piece centred at `centre` that is the hull of `points` (relative to `centre`).
+pub(super) fn piece(centre: Vector, points: Vec<Vector>) -> Option<ConvexPiece> {
+    let radius = points.iter().map(|p| p.length()).fold(0.0, f32::max);
+    let shape = SharedShape::convex_hull(&points)?;
     Some(ConvexPiece {
         centre,
         shape,
         radius,
+        points,
     })
 }
 
