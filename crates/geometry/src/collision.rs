@@ -737,7 +737,7 @@ impl CollisionChecker {
                 Arc::as_ptr(&self.obstacles) as usize,
             );
             let hints = hints.get(key, shapes.len() * n_obstacles, self.agent.pairs.len());
-            let mut spare = Vector::ZERO;
+            let mut spare = warm_gjk::PairHint::NONE;
             // Agent against the scene: first the obstacles near the moving shapes, then per shape.
             if !self.obstacles.is_empty() && !moving.is_empty() {
                 let mut all = aabbs[moving[0] as usize];

@@ -10,7 +10,7 @@ use parry3d::math::{Pose, Vector};
 use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::intersects;
-use super::warm_gjk::{CLIMB_ABOVE, ClimbingHull, gjk_warm, hint_separates};
+use super::warm_gjk::{CLIMB_ABOVE, ClimbingHull, PairHint, Support, gjk_warm, hint_separates};
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -161,40 +161,40 @@ impl ShapeEntry {
     }
 
     /// The shape's support function, where it has one: the climbing one for a large hull.
-    fn support(&self) -> Option<&dyn SupportMap> {
+    fn support(&self) -> Option<Support<'_>> {
         match &self.climb {
-            Some(climb) => Some(&**climb),
-            None => self.shape.as_support_map(),
+            Some(climb) => Some(Support::Climb(climb)),
+            None => self.shape.as_support_map().map(Support::Map),
         }
     }
 
     /// The shape's bounding box at `pose` as a support map, or the shape where it has none.
-    fn bound<'a>(&'a self, pose: &Pose, exact: &'a dyn SupportMap) -> (Pose, &'a dyn SupportMap) {
+    fn bound<'a>(&'a self, pose: &Pose, exact: Support<'a>) -> (Pose, &'a dyn SupportMap) {
         match &self.bounds {
             Some((at, cuboid)) => (*pose * *at, cuboid),
-            None => (*pose, exact),
+            None => (*pose, exact.map()),
         }
     }
 
-    /// [`ShapeEntry::hits`] warm-started by `hint`, the pair's last separating direction
-    /// (see [`super::warm_gjk`]): the hint's plane, then the bounding box, then the exact
-    /// shapes. Exact whatever the hint; updates it where the shapes are apart.
+    /// [`ShapeEntry::hits`] warm-started by `hint`, what the last test of the pair found (see
+    /// [`super::warm_gjk`]): the hint's plane, then the bounding box, then the exact shapes.
+    /// Exact whatever the hint; updates it.
     pub(super) fn hits_warm(
         &self,
         pose: &Pose,
         other: &dyn Shape,
         other_pose: &Pose,
-        hint: &mut Vector,
+        hint: &mut PairHint,
     ) -> bool {
         let (Some(a), Some(b)) = (self.support(), other.as_support_map()) else {
             return self.hits(pose, other, other_pose);
         };
-        if hint_separates(*hint, pose, a, other_pose, b) {
+        if hint_separates(hint, pose, a, other_pose, Support::Map(b)) {
             return false;
         }
         let (box_pose, bounds) = self.bound(pose, a);
         (self.bounds.is_none() || gjk_warm(&box_pose, bounds, other_pose, b, hint))
-            && gjk_warm(pose, a, other_pose, b, hint)
+            && gjk_warm(pose, a.map(), other_pose, b, hint)
     }
 
     /// [`ShapeEntry::hits_shape`] warm-started by `hint` as [`ShapeEntry::hits_warm`] is.
@@ -203,17 +203,18 @@ impl ShapeEntry {
         pose: &Pose,
         other: &ShapeEntry,
         other_pose: &Pose,
-        hint: &mut Vector,
+        hint: &mut PairHint,
     ) -> bool {
         let (Some(a), Some(b)) = (self.support(), other.support()) else {
             return self.hits_shape(pose, other, other_pose);
         };
-        if hint_separates(*hint, pose, a, other_pose, b) {
+        if hint_separates(hint, pose, a, other_pose, b) {
             return false;
         }
         let boxed = self.bounds.is_some() || other.bounds.is_some();
         let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
-        (!boxed || gjk_warm(&pa, ba, &pb, bb, hint)) && gjk_warm(pose, a, other_pose, b, hint)
+        (!boxed || gjk_warm(&pa, ba, &pb, bb, hint))
+            && gjk_warm(pose, a.map(), other_pose, b.map(), hint)
     }
 
     /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.

@@ -13,6 +13,7 @@ use parry3d::math::{Pose, Vector};
 use parry3d::query::details::intersection_test_support_map_support_map_with_params;
 use parry3d::query::gjk::VoronoiSimplex;
 use parry3d::shape::{ConvexPolyhedron, SupportMap};
+use parry3d::transformation::convex_hull;
 
 /// Hulls with more vertices than this get a [`ClimbingHull`]; below it a scan is as fast.
 pub(super) const CLIMB_ABOVE: usize = 32;
@@ -31,17 +32,16 @@ pub(super) struct ClimbingHull {
 }
 
 impl ClimbingHull {
-    /// The climbing support of `hull`: vertices sharing a face are neighbours (a superset of
-    /// the edge graph, which keeps the climb exact if parry merged nearly coplanar faces).
+    /// The climbing support of `hull`: the vertices of its triangulated surface, neighbours
+    /// where a triangle joins them (parry's hull merges coplanar triangles into polygons, whose
+    /// vertices would all be neighbours of each other).
     pub(super) fn new(hull: &ConvexPolyhedron) -> ClimbingHull {
-        let points = hull.points().to_vec();
+        let (points, triangles) = convex_hull(hull.points());
         let mut adjacent: Vec<Vec<u32>> = vec![Vec::new(); points.len()];
-        let ids = hull.vertices_adj_to_face();
-        for face in hull.faces() {
-            let start = face.first_vertex_or_edge as usize;
-            let verts = &ids[start..start + face.num_vertices_or_edges as usize];
-            for &a in verts {
-                adjacent[a as usize].extend(verts.iter().filter(|&&b| b != a));
+        for [a, b, c] in triangles {
+            for (u, v) in [(a, b), (b, c), (c, a)] {
+                adjacent[u as usize].push(v);
+                adjacent[v as usize].push(u);
             }
         }
         let (mut offsets, mut neighbours) = (vec![0u32], Vec::new());
@@ -61,6 +61,40 @@ impl ClimbingHull {
             offsets,
             neighbours,
             starts,
+        }
+    }
+
+    /// The vertex farthest along `dir` and its index, climbing from vertex `from` where it is
+    /// one (the last answer for a nearby direction: a step or two away), else from the best
+    /// of the start vertices.
+    pub(super) fn climb(&self, dir: Vector, from: u32) -> (u32, Vector) {
+        let (mut v, mut best) = match self.points.get(from as usize) {
+            Some(p) => (from as usize, p.dot(dir)),
+            None => {
+                let mut v = self.starts[0] as usize;
+                let mut best = self.points[v].dot(dir);
+                for &s in &self.starts[1..] {
+                    let d = self.points[s as usize].dot(dir);
+                    if d > best {
+                        (v, best) = (s as usize, d);
+                    }
+                }
+                (v, best)
+            }
+        };
+        // Each move strictly improves, so the climb ends.
+        loop {
+            let mut moved = false;
+            let around = &self.neighbours[self.offsets[v] as usize..self.offsets[v + 1] as usize];
+            for &n in around {
+                let d = self.points[n as usize].dot(dir);
+                if d > best {
+                    (v, best, moved) = (n as usize, d, true);
+                }
+            }
+            if !moved {
+                return (v as u32, self.points[v]);
+            }
         }
     }
 }
@@ -90,54 +124,72 @@ fn scan(points: &[Vector], dir: Vector) -> usize {
 
 impl SupportMap for ClimbingHull {
     fn local_support_point(&self, dir: Vector) -> Vector {
-        let mut v = self.starts[0] as usize;
-        let mut best = self.points[v].dot(dir);
-        for &s in &self.starts[1..] {
-            let d = self.points[s as usize].dot(dir);
-            if d > best {
-                (v, best) = (s as usize, d);
-            }
+        self.climb(dir, u32::MAX).1
+    }
+}
+
+/// A shape's support function for the separating-plane test: a climbing hull's, which can
+/// start where the last test of the pair ended, or any other.
+#[derive(Clone, Copy)]
+pub(super) enum Support<'a> {
+    Climb(&'a ClimbingHull),
+    Map(&'a dyn SupportMap),
+}
+
+impl<'a> Support<'a> {
+    /// As a support map, for GJK.
+    pub(super) fn map(self) -> &'a dyn SupportMap {
+        match self {
+            Support::Climb(c) => c,
+            Support::Map(m) => m,
         }
-        // Each move strictly improves, so the climb ends.
-        loop {
-            let mut moved = false;
-            let around = &self.neighbours[self.offsets[v] as usize..self.offsets[v + 1] as usize];
-            for &n in around {
-                let d = self.points[n as usize].dot(dir);
-                if d > best {
-                    (v, best, moved) = (n as usize, d, true);
-                }
+    }
+
+    /// The largest `n . x` over the shape at `pose` (`n` in the world frame); `vertex` is
+    /// where a climb starts and is left where it ended.
+    fn top(self, pose: &Pose, n: Vector, vertex: &mut u32) -> f32 {
+        match self {
+            Support::Climb(c) => {
+                let (v, p) = c.climb(pose.rotation.inverse() * n, *vertex);
+                *vertex = v;
+                n.dot(*pose * p)
             }
-            if !moved {
-                return self.points[v];
-            }
+            Support::Map(m) => m.support_point(pose, n).dot(n),
         }
     }
 }
 
-/// Whether the plane of normal `n` (world frame) separates `a` at `pose_a` from `b` at
-/// `pose_b`: `a`'s farthest point along `n` below `b`'s nearest. An exact certificate.
-pub(super) fn separated_along(
-    n: Vector,
-    pose_a: &Pose,
-    a: &dyn SupportMap,
-    pose_b: &Pose,
-    b: &dyn SupportMap,
-) -> bool {
-    let top_a = a.support_point(pose_a, n).dot(n);
-    let bottom_b = b.support_point(pose_b, -n).dot(n);
-    top_a < bottom_b
+/// What is remembered of a pair of shapes between tests: the last separating direction
+/// (world frame; zero for none) and the vertices the climbs along it ended at.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PairHint {
+    pub(super) dir: Vector,
+    vertex: [u32; 2],
 }
 
-/// Whether `hint` (zero for none) is a plane that separates the two shapes.
+impl PairHint {
+    /// Nothing known.
+    pub(super) const NONE: PairHint = PairHint {
+        dir: Vector::ZERO,
+        vertex: [u32::MAX; 2],
+    };
+}
+
+/// Whether the hint's direction is a plane that separates the two shapes (`a`'s farthest
+/// point along it below `b`'s nearest: an exact certificate).
 pub(super) fn hint_separates(
-    hint: Vector,
+    hint: &mut PairHint,
     pose_a: &Pose,
-    a: &dyn SupportMap,
+    a: Support,
     pose_b: &Pose,
-    b: &dyn SupportMap,
+    b: Support,
 ) -> bool {
-    hint != Vector::ZERO && separated_along(hint, pose_a, a, pose_b, b)
+    let n = hint.dir;
+    if n == Vector::ZERO {
+        return false;
+    }
+    let [va, vb] = &mut hint.vertex;
+    a.top(pose_a, n, va) < -b.top(pose_b, -n, vb)
 }
 
 /// GJK's exact test started from `hint`; where the shapes are apart, `hint` becomes the
@@ -147,10 +199,10 @@ pub(super) fn gjk_warm(
     a: &dyn SupportMap,
     pose_b: &Pose,
     b: &dyn SupportMap,
-    hint: &mut Vector,
+    hint: &mut PairHint,
 ) -> bool {
     let pos12 = pose_a.inv_mul(pose_b);
-    let init = (*hint != Vector::ZERO).then(|| pose_a.rotation.inverse() * *hint);
+    let init = (hint.dir != Vector::ZERO).then(|| pose_a.rotation.inverse() * hint.dir);
     let (hit, dir) = intersection_test_support_map_support_map_with_params(
         &pos12,
         a,
@@ -159,7 +211,7 @@ pub(super) fn gjk_warm(
         init,
     );
     if !hit {
-        *hint = pose_a.rotation * dir;
+        hint.dir = pose_a.rotation * dir;
     }
     hit
 }
@@ -169,8 +221,8 @@ pub(super) fn gjk_warm(
 /// where none is known.
 pub(super) struct PairHints {
     key: (usize, usize),
-    pub(super) obstacle: Vec<Vector>,
-    pub(super) self_pairs: Vec<Vector>,
+    pub(super) obstacle: Vec<PairHint>,
+    pub(super) self_pairs: Vec<PairHint>,
 }
 
 /// Hints of more pairs than this are not kept (a scene of thousands of obstacles).
@@ -211,8 +263,8 @@ impl HintCache {
         } else {
             obstacle_pairs
         };
-        hints.obstacle.resize(obstacle_pairs, Vector::ZERO);
-        hints.self_pairs.resize(self_pairs, Vector::ZERO);
+        hints.obstacle.resize(obstacle_pairs, PairHint::NONE);
+        hints.self_pairs.resize(self_pairs, PairHint::NONE);
         hints
     }
 }
@@ -224,17 +276,17 @@ mod tests {
     use parry3d::query;
     use parry3d::shape::{Ball, Cuboid};
 
-    /// Whether `a` at `pose_a` and `b` at `pose_b` intersect, exactly: `hint` (a world direction
-    /// from the last test of this pair, or zero for none) tried first as a separating plane, then
-    /// GJK started from it. Where they are apart, `hint` becomes the separating direction found.
+    /// Whether `a` at `pose_a` and `b` at `pose_b` intersect, as a check tests a pair: the
+    /// hint's plane first, then GJK started from it.
     fn intersect_warm(
         pose_a: &Pose,
-        a: &dyn SupportMap,
+        a: Support,
         pose_b: &Pose,
-        b: &dyn SupportMap,
-        hint: &mut Vector,
+        b: Support,
+        hint: &mut PairHint,
     ) -> bool {
-        !hint_separates(*hint, pose_a, a, pose_b, b) && gjk_warm(pose_a, a, pose_b, b, hint)
+        !hint_separates(hint, pose_a, a, pose_b, b)
+            && gjk_warm(pose_a, a.map(), pose_b, b.map(), hint)
     }
 
     fn sphere_points(n: usize, seed: u64) -> Vec<Vector> {
@@ -257,7 +309,8 @@ mod tests {
         );
         let climbing = ClimbingHull::new(&hull);
         let mut rng = fastrand::Rng::with_seed(5);
-        for _ in 0..5000 {
+        let mut last = u32::MAX;
+        for k in 0..5000 {
             let d = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
             let scanned = hull.points()[scan(hull.points(), d)].dot(d);
             assert_eq!(
@@ -265,6 +318,11 @@ mod tests {
                 scanned,
                 "direction {d:?}"
             );
+            // From wherever the last climb ended, or from a vertex out of range.
+            let from = if k % 10 == 0 { u32::MAX - 1 } else { last };
+            let (v, p) = climbing.climb(d, from);
+            assert_eq!(p.dot(d), scanned, "direction {d:?} from {from}");
+            last = v;
         }
     }
 
@@ -276,7 +334,7 @@ mod tests {
         let ball = Ball::new(0.07);
         let mut rng = fastrand::Rng::with_seed(11);
         let mut hits = 0;
-        let mut hint = Vector::ZERO;
+        let mut hint = PairHint::NONE;
         for k in 0..4000 {
             let pose = |rng: &mut fastrand::Rng| {
                 Pose::from_parts(
@@ -286,16 +344,16 @@ mod tests {
             };
             let (pa, pb) = (pose(&mut rng), pose(&mut rng));
             if k % 7 == 0 {
-                hint = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
+                hint.dir = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
             }
-            let other: &dyn SupportMap = if k % 2 == 0 { &cuboid } else { &ball };
+            let other = Support::Map(if k % 2 == 0 { &cuboid } else { &ball });
             let distance = if k % 2 == 0 {
                 query::distance(&pa, &hull, &pb, &cuboid)
             } else {
                 query::distance(&pa, &hull, &pb, &ball)
             };
             let distance = distance.unwrap().distance;
-            let hit = intersect_warm(&pa, &climbing, &pb, other, &mut hint);
+            let hit = intersect_warm(&pa, Support::Climb(&climbing), &pb, other, &mut hint);
             // Apart only where apart; in contact where GJK may be (within millimetres).
             assert!(
                 hit || distance > 0.0,
