@@ -18,7 +18,9 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Rotation, Vector};
 use parry3d::shape::SharedShape;
 
-use crate::agent::{AgentModel, KinematicChain, MeshOptions, PackagePath};
+mod swallowing_hulls;
+
+use crate::agent::{AgentModel, ConvexMode, KinematicChain, MeshOptions, PackagePath, Primitive};
 use crate::effort::EffortParams;
 use crate::scene::{
     AgentId, AgentKind, AgentSpecResolved, ObjectId, ObjectModel, Scene, SceneError,
@@ -159,6 +161,44 @@ pub fn base_pose(x: f32, y: f32, yaw: f32) -> Pose {
 }
 
 /// The URDF text of an agent of `scene`.
+/// `model` (loaded by `load` with `meshes`), with the collision meshes whose hulls overlap
+/// another link in the initial configuration `q`, where their decompositions do not, loaded
+/// decomposed instead ([`swallowing_hulls`]).
+fn decompose_swallowing_hulls(
+    model: AgentModel,
+    q: &[f32],
+    mut meshes: MeshOptions,
+    load: impl Fn(&MeshOptions) -> Result<AgentModel, SceneError>,
+) -> Result<AgentModel, SceneError> {
+    let has_hulls = model.links().iter().any(|l| {
+        l.collisions
+            .iter()
+            .any(|c| matches!(c.primitive, Primitive::Convex { pieces: 1, .. }))
+    });
+    if !has_hulls {
+        return Ok(model);
+    }
+    let links = swallowing_hulls::colliding_hull_links(&model, q, &meshes.modes);
+    if links.is_empty() {
+        return Ok(model);
+    }
+    for l in &links {
+        meshes.modes.insert(l.clone(), ConvexMode::Decompose);
+    }
+    let decomposed = load(&meshes)?;
+    let back = swallowing_hulls::still_colliding(&decomposed, q, &links);
+    if back.is_empty() {
+        return Ok(decomposed);
+    }
+    if back.len() == links.len() {
+        return Ok(model);
+    }
+    for l in &back {
+        meshes.modes.remove(l);
+    }
+    load(&meshes)
+}
+
 fn read_model(path: &Path, scene: &Scene, at: &str) -> Result<String, SceneError> {
     std::fs::read_to_string(path).map_err(|e| {
         scene.error(
@@ -231,9 +271,18 @@ impl World {
                 spec.mount_height,
             )
             .map_err(|e| scene.error(&format!("{at}.{}", e.key), e.message))?;
-            let model =
-                AgentModel::from_urdf_str_with(&text, &spec.urdf.display().to_string(), &meshes)
-                    .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+            let load = |meshes: &MeshOptions| {
+                let model =
+                    AgentModel::from_urdf_str_with(&text, &spec.urdf.display().to_string(), meshes)
+                        .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
+                match &spec.srdf {
+                    Some(path) => model
+                        .with_srdf_file(path)
+                        .map_err(|e| scene.error(&format!("{at}.srdf"), e.to_string())),
+                    None => Ok(model),
+                }
+            };
+            let model = load(&meshes)?;
             for (link, _) in &spec.convex_modes {
                 if model.link_id(link).is_err() {
                     return Err(scene.error(
@@ -245,12 +294,6 @@ impl World {
                     ));
                 }
             }
-            let model = match &spec.srdf {
-                Some(path) => model
-                    .with_srdf_file(path)
-                    .map_err(|e| scene.error(&format!("{at}.srdf"), e.to_string()))?,
-                None => model,
-            };
             let mut q = model.default_configuration().into_vec();
             if let Some(name) = &spec.posture {
                 let values = model.posture(name);
@@ -292,6 +335,7 @@ impl World {
                 }
                 q[k] = *v;
             }
+            let model = decompose_swallowing_hulls(model, &q, meshes, load)?;
             let link = |key: &str, name: &str| {
                 model.link_id(name).map_err(|_| {
                     scene.error(
