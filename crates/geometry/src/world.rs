@@ -160,7 +160,6 @@ pub fn base_pose(x: f32, y: f32, yaw: f32) -> Pose {
     Pose::from_parts(Vector::new(x, y, 0.0), Rotation::from_rotation_z(yaw))
 }
 
-/// The URDF text of an agent of `scene`.
 /// `model` (loaded by `load` with `meshes`), with the collision meshes whose hulls overlap
 /// another link in the initial configuration `q`, where their decompositions do not, loaded
 /// decomposed instead ([`swallowing_hulls`]).
@@ -199,6 +198,7 @@ fn decompose_swallowing_hulls(
     load(&meshes)
 }
 
+/// The URDF text of an agent of `scene`.
 fn read_model(path: &Path, scene: &Scene, at: &str) -> Result<String, SceneError> {
     std::fs::read_to_string(path).map_err(|e| {
         scene.error(

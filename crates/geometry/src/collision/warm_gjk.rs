@@ -225,8 +225,9 @@ pub(super) struct PairHints {
     pub(super) self_pairs: Vec<PairHint>,
 }
 
-/// Hints of more pairs than this are not kept (a scene of thousands of obstacles).
-const MAX_OBSTACLE_HINTS: usize = 1 << 20;
+/// Hints of more pairs than this are not kept (a scene of thousands of obstacles): at most
+/// 5 MB per checker a thread keeps hints for.
+const MAX_OBSTACLE_HINTS: usize = 1 << 18;
 
 /// The hints of the last few checkers a thread used, keyed by their agent and obstacles.
 #[derive(Default)]
