@@ -60,13 +60,17 @@ impl Placed {
 ///
 /// The exact intersection test decides first: parry's `contact` between two cuboids takes the
 /// general support-map path (GJK/EPA), which can report a penetration of a few millimetres for
-/// boxes that are apart (a finger 2.9 mm from a book read as 1.5 mm deep).
+/// boxes that are apart (a finger 2.9 mm from a book read as 1.5 mm deep). The intersection
+/// test can err the same way between hulls of hundreds of vertices (a finger's hull 3.0 mm
+/// from a forearm's piece read as intersecting), so where it reports contact a pair is still
+/// cleared if a separating plane proves it apart ([`separated`]).
 pub fn depth(a: &Placed, b: &Placed) -> f32 {
     if !a.aabb.intersects(&b.aabb) {
         return 0.0;
     }
     if query::intersection_test(&a.pose, &*a.shape, &b.pose, &*b.shape)
         .is_ok_and(|i| !i.intersecting)
+        || separated(a, b)
     {
         return 0.0;
     }
@@ -74,6 +78,28 @@ pub fn depth(a: &Placed, b: &Placed) -> f32 {
         Ok(Some(c)) => (-c.dist).max(0.0),
         _ => 0.0,
     }
+}
+
+/// Whether a plane provably separates two convex shapes: the one through parry's closest
+/// points, normal to the segment between them, with all of `a` strictly on one side and all of
+/// `b` on the other, as the shapes' support points (their farthest points along the normal)
+/// show. A proof, whatever the closest points are worth; `false` where there is none.
+pub fn separated(a: &Placed, b: &Placed) -> bool {
+    let (Some(sa), Some(sb)) = (a.shape.as_support_map(), b.shape.as_support_map()) else {
+        return false;
+    };
+    let margin = 0.05;
+    let Ok(query::ClosestPoints::WithinMargin(pa, pb)) =
+        query::closest_points(&a.pose, &*a.shape, &b.pose, &*b.shape, margin)
+    else {
+        return false;
+    };
+    let Some(n) = (pb - pa).try_normalize() else {
+        return false;
+    };
+    let top_a = sa.support_point(&a.pose, n).dot(n);
+    let bottom_b = sb.support_point(&b.pose, -n).dot(n);
+    top_a < bottom_b
 }
 
 /// Every shape of every object at its pose (`skip` left out).
@@ -220,6 +246,76 @@ mod tests {
             Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize(),
         );
         Placed::new(owner, &part, &frame)
+    }
+
+    /// The two hulls of `testdata/hulls_3mm_apart.json` (the real PR2's right gripper finger,
+    /// 376 vertices, and a convex piece of its left forearm, as a planned approach placed them),
+    /// `b` moved by `shift` metres along the segment between their closest points.
+    fn fixture_hulls(shift: f32) -> (Placed, Placed) {
+        let text = include_str!("testdata/hulls_3mm_apart.json");
+        let json: serde_json::Value = serde_json::from_str(text).unwrap();
+        let hull = |key: &str, owner: Owner, shift: Vector| {
+            let body = &json[key];
+            let f = |v: &serde_json::Value| v.as_f64().unwrap() as f32;
+            let points: Vec<Vector> = body["vertices"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| Vector::new(f(&p[0]), f(&p[1]), f(&p[2])))
+                .collect();
+            let t = &body["translation"];
+            let q = &body["rotation_xyzw"];
+            let part = Part {
+                shape: SharedShape::convex_hull(&points).unwrap(),
+                pose: Pose::IDENTITY,
+            };
+            let frame = Pose::from_parts(
+                Vector::new(f(&t[0]), f(&t[1]), f(&t[2])) + shift,
+                Rotation::from_xyzw(f(&q[0]), f(&q[1]), f(&q[2]), f(&q[3])),
+            );
+            Placed::new(owner, &part, &frame)
+        };
+        let (a, b) = (
+            hull("a", Owner::Link(0, 0), Vector::ZERO),
+            hull("b", Owner::Link(0, 1), Vector::ZERO),
+        );
+        let Ok(query::ClosestPoints::WithinMargin(pa, pb)) =
+            query::closest_points(&a.pose, &*a.shape, &b.pose, &*b.shape, 0.1)
+        else {
+            panic!("the fixture's hulls are near");
+        };
+        let n = (pb - pa).normalize();
+        (a, hull("b", Owner::Link(0, 1), n * shift))
+    }
+
+    /// parry's intersection test reports these hulls, 3.0 mm apart, as intersecting (and its
+    /// contact as 2.8 mm deep); a separating plane proves them apart.
+    #[test]
+    fn hulls_apart_have_no_depth_though_the_intersection_test_says_otherwise() {
+        let (a, b) = fixture_hulls(0.0);
+        let gap = query::distance(&a.pose, &*a.shape, &b.pose, &*b.shape)
+            .unwrap()
+            .distance;
+        assert!((0.0029..0.0031).contains(&gap), "{gap} m apart");
+        assert!(
+            query::intersection_test(&a.pose, &*a.shape, &b.pose, &*b.shape)
+                .unwrap()
+                .intersecting,
+            "the fixture shows parry's false contact"
+        );
+        assert!(separated(&a, &b) && separated(&b, &a));
+        assert_eq!(depth(&a, &b), 0.0);
+        assert_eq!(depth(&b, &a), 0.0);
+    }
+
+    /// The same hulls pushed 1 cm into each other: no plane separates them, and the depth is
+    /// about what they overlap.
+    #[test]
+    fn hulls_that_overlap_are_not_cleared() {
+        let (a, b) = fixture_hulls(-0.013);
+        assert!(!separated(&a, &b) && !separated(&b, &a));
+        let d = depth(&a, &b);
+        assert!((0.005..0.02).contains(&d), "depth {d}");
     }
 
     /// A gripper finger 2.9 mm from a book, poses as a planned transfer has them: parry's
