@@ -248,9 +248,9 @@ mod tests {
         Placed::new(owner, &part, &frame)
     }
 
-    /// The two hulls of `testdata/hulls_3mm_apart.json` (the real PR2's right gripper finger,
-    /// 376 vertices, and a convex piece of its left forearm, as a planned approach placed them),
-    /// `b` moved by `shift` metres along the segment between their closest points.
+    /// The two hulls of `testdata/hulls_3mm_apart.json` as a planned approach placed them: `a`,
+    /// a convex piece of the real PR2's left forearm (120 vertices), and `b`, its right gripper
+    /// finger (376), moved by `shift` metres along the segment between their closest points.
     fn fixture_hulls(shift: f32) -> (Placed, Placed) {
         let text = include_str!("testdata/hulls_3mm_apart.json");
         let json: serde_json::Value = serde_json::from_str(text).unwrap();
