@@ -41,8 +41,8 @@ use parry3d::shape::{Shape, SharedShape};
 
 use crate::agent::{AgentModel, ModelError};
 
+mod climbing_hull;
 mod self_collision;
-mod warm_gjk;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
 
 /// One piece of static scene geometry.
@@ -358,7 +358,6 @@ struct Scratch {
     candidates: Vec<u32>,
     /// World centres of the links' bounding spheres.
     centres: Vec<Vector>,
-    hints: warm_gjk::HintCache,
 }
 
 thread_local! {
@@ -688,7 +687,6 @@ impl CollisionChecker {
                 aabbs,
                 candidates,
                 centres,
-                hints,
             } = &mut *guard;
             let model = &self.agent.model;
             let shapes = &self.agent.shapes;
@@ -731,13 +729,6 @@ impl CollisionChecker {
                     (&self.agent.all_shapes, &self.agent.groups)
                 }
             };
-            let n_obstacles = self.obstacles.len();
-            let key = (
-                Arc::as_ptr(&self.agent) as usize,
-                Arc::as_ptr(&self.obstacles) as usize,
-            );
-            let hints = hints.get(key, shapes.len() * n_obstacles, self.agent.pairs.len());
-            let mut spare = warm_gjk::PairHint::NONE;
             // Agent against the scene: first the obstacles near the moving shapes, then per shape.
             if !self.obstacles.is_empty() && !moving.is_empty() {
                 let mut all = aabbs[moving[0] as usize];
@@ -752,12 +743,8 @@ impl CollisionChecker {
                     for &o in candidates.iter() {
                         let o = o as usize;
                         let obstacle = &self.obstacles.obstacles[o];
-                        let hint = hints
-                            .obstacle
-                            .get_mut(i * n_obstacles + o)
-                            .unwrap_or(&mut spare);
                         if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
-                            && s.hits_warm(&poses[i], &*obstacle.shape.0, &obstacle.pose, hint)
+                            && s.hits_cold(&poses[i], &*obstacle.shape.0, &obstacle.pose)
                             && report(Hit::Obstacle(i, o))
                         {
                             return;
@@ -777,11 +764,7 @@ impl CollisionChecker {
                     if d.length_squared() > (ra + rb) * (ra + rb) {
                         continue;
                     }
-                    let range = g.start as usize..g.end as usize;
-                    for (&(a, b), hint) in pairs[range.clone()]
-                        .iter()
-                        .zip(&mut hints.self_pairs[range])
-                    {
+                    for &(a, b) in &pairs[g.start as usize..g.end as usize] {
                         let (a, b) = (a as usize, b as usize);
                         let r = shapes[a].radius + shapes[b].radius;
                         if (poses[a].translation - poses[b].translation).length_squared() > r * r {
@@ -790,7 +773,7 @@ impl CollisionChecker {
                         if !aabb_overlap(&aabbs[a], &aabbs[b]) {
                             continue;
                         }
-                        if shapes[a].hits_shape_warm(&poses[a], &shapes[b], &poses[b], hint)
+                        if shapes[a].hits_shape_cold(&poses[a], &shapes[b], &poses[b])
                             && report(Hit::SelfPair(a, b))
                         {
                             return;
