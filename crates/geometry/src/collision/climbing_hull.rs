@@ -124,23 +124,6 @@ impl SupportMap for ClimbingHull {
     }
 }
 
-/// A shape's support function: a climbing hull's, or any other.
-#[derive(Clone, Copy)]
-pub(super) enum Support<'a> {
-    Climb(&'a ClimbingHull),
-    Map(&'a dyn SupportMap),
-}
-
-impl<'a> Support<'a> {
-    /// As a support map, for GJK.
-    pub(super) fn map(self) -> &'a dyn SupportMap {
-        match self {
-            Support::Climb(c) => c,
-            Support::Map(m) => m,
-        }
-    }
-}
-
 /// GJK's exact intersection test of `a` at `pose_a` and `b` at `pose_b`, from its default
 /// start.
 pub(super) fn gjk(pose_a: &Pose, a: &dyn SupportMap, pose_b: &Pose, b: &dyn SupportMap) -> bool {

@@ -9,7 +9,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
-use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, Support, gjk};
+use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
 use super::intersects;
 use crate::agent::{AgentModel, ModelError};
 
@@ -161,18 +161,18 @@ impl ShapeEntry {
     }
 
     /// The shape's support function, where it has one: the climbing one for a large hull.
-    fn support(&self) -> Option<Support<'_>> {
+    fn support(&self) -> Option<&dyn SupportMap> {
         match &self.climb {
-            Some(climb) => Some(Support::Climb(climb)),
-            None => self.shape.as_support_map().map(Support::Map),
+            Some(climb) => Some(&**climb),
+            None => self.shape.as_support_map(),
         }
     }
 
     /// The shape's bounding box at `pose` as a support map, or the shape where it has none.
-    fn bound<'a>(&'a self, pose: &Pose, exact: Support<'a>) -> (Pose, &'a dyn SupportMap) {
+    fn bound<'a>(&'a self, pose: &Pose, exact: &'a dyn SupportMap) -> (Pose, &'a dyn SupportMap) {
         match &self.bounds {
             Some((at, cuboid)) => (*pose * *at, cuboid),
-            None => (*pose, exact.map()),
+            None => (*pose, exact),
         }
     }
 
@@ -186,7 +186,7 @@ impl ShapeEntry {
         };
         let (box_pose, bounds) = self.bound(pose, a);
         (self.bounds.is_none() || gjk(&box_pose, bounds, other_pose, b))
-            && gjk(pose, a.map(), other_pose, b)
+            && gjk(pose, a, other_pose, b)
     }
 
     /// [`ShapeEntry::hits_shape`] with climbing supports, as [`ShapeEntry::hits_cold`].
@@ -201,7 +201,7 @@ impl ShapeEntry {
         };
         let boxed = self.bounds.is_some() || other.bounds.is_some();
         let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
-        (!boxed || gjk(&pa, ba, &pb, bb)) && gjk(pose, a.map(), other_pose, b.map())
+        (!boxed || gjk(&pa, ba, &pb, bb)) && gjk(pose, a, other_pose, b)
     }
 
     /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.
