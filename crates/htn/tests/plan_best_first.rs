@@ -115,3 +115,15 @@ fn an_assembly_problem_is_solved_from_the_initial_state_after_the_first_phase() 
     assert!(stats.rc_methods > 0, "{stats:?}");
     assert_eq!(plan.actions.len(), 18, "2 x depth + 2 actions");
 }
+
+#[test]
+fn randomized_restarts_find_the_short_way_before_the_best_first_search_starts() {
+    // Handover at 2 s; the restarts run from 1 s: some run tries `go` before wandering.
+    let (d, p, r) = wander(10.0, 0.8);
+    let Outcome::Found { plan } = &r.outcome else {
+        panic!("no plan: {:?}", r.outcome)
+    };
+    assert!(r.stats.restarts > 0, "the plan comes from a restart");
+    assert!(!r.stats.best_first, "found before the best-first search");
+    validate(&d, &p, plan, &[]).unwrap();
+}

@@ -259,6 +259,10 @@ pub struct SearchStats {
     pub best_first: bool,
     #[serde(default)]
     pub best_first_nodes: u64,
+    /// Randomized depth-first runs of the portfolio (`search/restarts.rs`); their nodes count
+    /// in `nodes`.
+    #[serde(default)]
+    pub restarts: u64,
     /// Ground actions and methods of the best-first search's relaxed composition (both 0
     /// when it was not ground: no fallback, or a cap of `search/heuristic.rs` stopped it).
     #[serde(default)]

@@ -41,6 +41,7 @@ mod limits;
 mod portfolio;
 mod relevance;
 mod repair;
+mod restarts;
 
 use driver::{fallback_time, repairs_time};
 use frames::{ChoiceStack, Frame, GeoFrame, HtnFrame, Key};
@@ -160,6 +161,11 @@ pub(crate) struct Search<'a, 'o> {
     switch_at: Option<std::time::Duration>,
     /// Goal literals' guarded achievers (`guard.rs`), when some goal literal has any.
     guards: Option<guard::Guards>,
+    /// The seed of the order of methods and bindings (0: domain and binder order; see
+    /// `restarts.rs`).
+    shuffle: u64,
+    /// The node count at which the current depth-first run stops (a restart's budget).
+    run_cap: Option<u64>,
 }
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -235,6 +241,8 @@ impl<'a, 'o> Search<'a, 'o> {
             masks,
             lifted_masks,
             switch_at: fallback_time(c, opts).or_else(|| repairs_time(c, opts)),
+            shuffle: 0,
+            run_cap: None,
             stats: SearchStats {
                 guarded_goals: guards.as_ref().map_or(0, guard::Guards::count),
                 ..SearchStats::default()

@@ -34,6 +34,9 @@ impl<'a, 'o> Search<'a, 'o> {
             {
                 return Ok(Stop::Switch);
             }
+            if self.run_cap.is_some_and(|cap| self.stats.nodes >= cap) {
+                return Ok(Stop::Switch);
+            }
             if self.top == NIL {
                 if self.goal_holds() {
                     return Ok(Stop::Found);
@@ -294,7 +297,8 @@ impl<'a, 'o> Search<'a, 'o> {
                     f.task,
                     (f.count * 4).clamp(FIRST_CHUNK, MAX_CHUNK),
                 );
-                let (bindings, count, more) = self.bindings_after(m, task, Some(&after), max);
+                let (mut bindings, count, more) = self.bindings_after(m, task, Some(&after), max);
+                self.order_bindings(&mut bindings, count);
                 let f = &mut self.htn_frames[h];
                 (f.bindings, f.count, f.more, f.next) = (bindings, count, more, 0);
                 continue;
@@ -304,8 +308,9 @@ impl<'a, 'o> Search<'a, 'o> {
             if mpos >= methods.len() {
                 return false;
             }
-            let m = methods[mpos];
-            let (bindings, count, more) = self.bindings_after(m, task, None, FIRST_CHUNK);
+            let m = methods[self.method_order(task, methods.len(), mpos)];
+            let (mut bindings, count, more) = self.bindings_after(m, task, None, FIRST_CHUNK);
+            self.order_bindings(&mut bindings, count);
             let f = &mut self.htn_frames[h];
             f.mpos = mpos + 1;
             f.method = m;

@@ -13,7 +13,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use super::super::{Outcome, PlanError, SearchResult};
+use super::super::compile::Compiled;
+use super::super::{Outcome, PlanError, PlannerOptions, SearchResult};
 use super::{Search, Stop};
 use crate::budget::{StopOn, Watch};
 
@@ -30,7 +31,6 @@ impl Search<'_, '_> {
     pub fn run_portfolio(mut self) -> Result<SearchResult, PlanError> {
         let decided = Arc::new(AtomicBool::new(false));
         let (c, opts, start) = (self.c, self.opts, self.start);
-        let deadline = opts.limits.time.and_then(|t| start.checked_add(t));
         let begin = self.switch_at.and_then(|s| start.checked_add(s));
         std::thread::scope(|scope| {
             let flag = decided.clone();
@@ -38,19 +38,7 @@ impl Search<'_, '_> {
                 .name("htn-best-first".into())
                 // The main thread's stack, where the best-first search ran before.
                 .stack_size(8 << 20)
-                .spawn_scoped(scope, move || {
-                    if !wait_until(begin, &flag) {
-                        return Ok(None);
-                    }
-                    let _stop = StopOn::install(flag.clone());
-                    let mut b = Search::new(c, &opts, None)?.started_at(start);
-                    b.watch = Watch::new(deadline, opts.limits.memory_mb.map(|m| m / 4 * 3));
-                    let r = b.run_best_first();
-                    if decisive(&r.outcome) {
-                        flag.store(true, Ordering::Relaxed);
-                    }
-                    Ok::<_, PlanError>(Some(r))
-                });
+                .spawn_scoped(scope, move || second_thread(c, &opts, start, begin, &flag));
             let Ok(best_first) = spawned else {
                 return self.run();
             };
@@ -85,6 +73,62 @@ impl Search<'_, '_> {
     }
 }
 
+/// The second thread: randomized restarts from [`RESTARTS_AFTER`] (or the handover time, when
+/// sooner) to the handover time `begin`, then the best-first search; `None` when the
+/// depth-first search decided first. Both keep to three quarters of the memory limit.
+fn second_thread(
+    c: &Compiled,
+    opts: &PlannerOptions,
+    start: Instant,
+    begin: Option<Instant>,
+    flag: &Arc<AtomicBool>,
+) -> Result<Option<SearchResult>, PlanError> {
+    let deadline = opts.limits.time.and_then(|t| start.checked_add(t));
+    let memory = opts.limits.memory_mb.map(|m| m / 4 * 3);
+    let fresh = || -> Result<Search<'_, '_>, PlanError> {
+        let mut s = Search::new(c, opts, None)?.started_at(start);
+        s.watch = Watch::new(deadline, memory);
+        Ok(s)
+    };
+    let restarts_from = begin.map(|b| start.checked_add(RESTARTS_AFTER).map_or(b, |r| b.min(r)));
+    if !wait_until(restarts_from, flag) {
+        return Ok(None);
+    }
+    let _stop = StopOn::install(flag.clone());
+    let mut restarts = 0;
+    if let Some(until) = begin.filter(|&b| Instant::now() < b) {
+        let mut r = fresh()?;
+        let outcome = match r.restarts(until)? {
+            Stop::Found => Some(Outcome::Found {
+                plan: r.build_plan(),
+            }),
+            Stop::Limit(limit) => Some(Outcome::LimitReached { limit }),
+            Stop::Exhausted | Stop::Switch => None,
+        };
+        if let Some(outcome) = outcome {
+            let r = r.finish(outcome);
+            if decisive(&r.outcome) {
+                flag.store(true, Ordering::Relaxed);
+            }
+            return Ok(Some(r));
+        }
+        restarts = r.stats.restarts;
+    }
+    if !wait_until(begin, flag) {
+        return Ok(None);
+    }
+    let mut r = fresh()?.run_best_first();
+    r.stats.restarts = restarts;
+    if decisive(&r.outcome) {
+        flag.store(true, Ordering::Relaxed);
+    }
+    Ok(Some(r))
+}
+
+/// When the restarts start: the depth-first search runs alone for its first second, so that
+/// what it decides there is decided exactly as without them (one thread, the domain's order).
+const RESTARTS_AFTER: Duration = Duration::from_secs(1);
+
 /// Waits until `begin` (at once without one); false when `decided` is set first.
 fn wait_until(begin: Option<Instant>, decided: &AtomicBool) -> bool {
     while let Some(left) = begin.and_then(|b| b.checked_duration_since(Instant::now())) {
@@ -110,6 +154,7 @@ fn combine(d: SearchResult, b: SearchResult) -> SearchResult {
         (d, b)
     };
     winner.stats.nodes += other.stats.nodes;
+    winner.stats.restarts = winner.stats.restarts.max(other.stats.restarts);
     winner.stats.best_first_nodes = winner
         .stats
         .best_first_nodes
