@@ -12,6 +12,8 @@ use htn::{parse_domain, parse_problem};
 
 /// The domain: `t` binds `?a ?b` by `pre` (a precondition or none), marks `?a` (which may
 /// change `good`, so `finish`'s precondition stays where it is), then needs `(good ?a ?b)`.
+/// `bless`, never used, may add `good`: a binding whose `mark` deletes the `good` fact that
+/// `finish` needs is then tried like any other (`search/consumed.rs` would skip it).
 fn domain(pre: &str) -> String {
     format!(
         "(define (domain pieces)
@@ -23,7 +25,8 @@ fn domain(pre: &str) -> String {
             :ordered-subtasks (and (mark ?a) (finish ?a ?b)))
           (:action mark :parameters (?x - obj)
             :effect (and (marked ?x) (not (good ?x ?x))))
-          (:action finish :parameters (?x ?y - obj) :precondition (good ?x ?y)))"
+          (:action finish :parameters (?x ?y - obj) :precondition (good ?x ?y))
+          (:action bless :parameters (?x ?y - obj) :effect (good ?x ?y)))"
     )
 }
 

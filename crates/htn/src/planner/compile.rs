@@ -9,8 +9,8 @@
 //!   numbered slots;
 //! - `statics.rs`: the predicates no action changes;
 //! - `pull_up.rs`: precondition pull-up (methods gain what their subtasks require);
-//! - `late.rs`: the initial task network's parameters bound late, by the method of the one
-//!   subtask that uses them;
+//! - `late.rs`: parameters (of methods and of the initial task network) bound late, by the
+//!   method of the one subtask that uses them;
 //! - `goals.rs`: the goal's literals and landmarks, and what each task may achieve of them.
 
 use std::collections::HashMap;
@@ -105,9 +105,9 @@ pub(crate) struct CMethod {
     pub n_params: usize,
     /// The parameter slots, `0..n_params`.
     pub params: Vec<u16>,
-    /// The parameters the search binds when it applies the method: all of them but, for the
-    /// initial task network, those left to the one subtask that uses them (`late.rs`), which
-    /// stay unbound in the subtask until one of its methods binds them.
+    /// The parameters the search binds when it applies the method: all of them but those left
+    /// to the one subtask that uses them (`late.rs`), which stay unbound in the subtask until
+    /// one of its methods binds them.
     pub bind: Vec<u16>,
     pub slot_types: Vec<u32>,
     /// Precondition and constraints as one conjunction.

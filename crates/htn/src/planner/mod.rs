@@ -232,6 +232,10 @@ pub struct SearchStats {
     pub loops_pruned: u64,
     /// Nodes pruned because the remaining tasks cannot achieve a false goal literal.
     pub goal_pruned: u64,
+    /// Method bindings skipped because a subtask deletes, for good, a fact a later task
+    /// needs (see `search/consumed.rs`).
+    #[serde(default)]
+    pub consumed_pruned: u64,
     /// Goal literals with guarded achievers (see `search/guard.rs`); pruning by them counts
     /// in `goal_pruned`.
     #[serde(default)]

@@ -30,6 +30,7 @@ use super::eval::{Cursor, EffectBuf, Eval, UNBOUND};
 use super::{Limit, PlanError, PlannerOptions, SearchStats};
 
 mod bfs;
+mod consumed;
 mod guard;
 mod heuristic;
 
@@ -166,6 +167,8 @@ pub(crate) struct Search<'a, 'o> {
     shuffle: u64,
     /// The node count at which the current depth-first run stops (a restart's budget).
     run_cap: Option<u64>,
+    /// What actions consume of the facts no action adds (`consumed.rs`).
+    consumed: Option<consumed::Consumed>,
 }
 
 impl<'a, 'o> Search<'a, 'o> {
@@ -243,6 +246,7 @@ impl<'a, 'o> Search<'a, 'o> {
             switch_at: fallback_time(c, opts).or_else(|| repairs_time(c, opts)),
             shuffle: 0,
             run_cap: None,
+            consumed: consumed::Consumed::build(c),
             stats: SearchStats {
                 guarded_goals: guards.as_ref().map_or(0, guard::Guards::count),
                 ..SearchStats::default()

@@ -1,4 +1,4 @@
-//! The initial task network's parameters bound late. A method's parameter that its task does
+//! Parameters bound late. A method's parameter that its task does
 //! not give is bound when the method is applied: by its precondition, or else by type
 //! enumeration, in the state where the method starts. The initial task network is a method
 //! too, and a problem's `:htn` may have parameters (Woodworking's surfaces and colours of each
@@ -19,25 +19,22 @@
 //! subtask's method takes is a binding of the network. The plan's decomposition records the
 //! subtask with the value bound, from which a verifier finds the network's binding.
 //!
-//! The same deferral for every method's parameters (`late_params` works for any method) solved
-//! 14 of Woodworking's 30 problems instead of 10, but lost 3 of Factories' 8: there the
-//! deferred location of a factory is then chosen among the free locations in the order of the
-//! facts, not of the objects, the first is the one the last factory needs, and the depth-first
-//! search sees that dead end only at the last task. Both orders are arbitrary; until the search
-//! detects such dead ends, only the network's parameters (which no shared or held-out domain
-//! but Woodworking has) are bound late.
+//! The same deferral applies to every method's parameters. It was once kept to the initial
+//! network's: it solved 14 of Woodworking's 30 problems instead of 10 but lost 3 of
+//! Factories' 8, where the deferred location of a factory is chosen among the free locations
+//! in the order of the facts, the first is the one the last factory needs, and the depth-first
+//! search saw that dead end only at the last task. It now sees it when the factory's method
+//! is chosen (`search/consumed.rs`), and Factories gains instead of losing.
 
 use super::{CTerm, Compiled};
 
-/// Marks the parameters bound late (see the module docs): they leave their method's `bind`.
-/// Only the initial task network's: for a method's own parameters the deferral changes the
-/// order in which values come (the subtask's method binds them in the order of the facts that
-/// hold, not in the order of the objects), and the depth-first search depends on that order
-/// where it cannot see a dead end (see the module docs).
+/// Marks the parameters bound late, of every method and of the initial task network (see the
+/// module docs): they leave their method's `bind`.
 pub(super) fn bind_late(c: &mut Compiled) {
-    let m = c.root_method as usize;
-    let late = late_params(c, m);
-    c.methods[m].bind.retain(|v| !late.contains(v));
+    for m in 0..c.methods.len() {
+        let late = late_params(c, m);
+        c.methods[m].bind.retain(|v| !late.contains(v));
+    }
 }
 
 /// The parameters of method `m` bound late: in none of its task's arguments and no literal of

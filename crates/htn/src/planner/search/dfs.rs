@@ -281,12 +281,17 @@ impl<'a, 'o> Search<'a, 'o> {
             if f.next < f.count {
                 let i = f.next;
                 f.next += 1;
+                let (m, rest) = (f.method, f.rest);
+                let binding = f.binding(i).to_vec();
+                if self.consumes_needed(m, &binding, rest) {
+                    self.stats.consumed_pruned += 1;
+                    continue;
+                }
+                let f = &mut self.htn_frames[h];
                 if f.tried > 0 {
                     self.stats.htn_backtracks += 1;
                 }
                 f.tried += 1;
-                let m = f.method;
-                let binding = f.binding(i).to_vec();
                 self.apply_method(h, m, &binding);
                 return true;
             }
