@@ -88,8 +88,10 @@ pub struct Args {
     pub no_goal_guards: bool,
     /// With --time-limit, on problems without geometric tasks: the share of the time during
     /// which a best-first search runs beside the depth-first one, on a second thread, once the
-    /// depth-first search has used the rest without deciding; the first to find a plan or
-    /// prove there is none ends both (0 turns it off, 1 starts both at once).
+    /// depth-first search has used the rest without deciding; before it, from 1 s on, that
+    /// thread runs short depth-first searches in random orders (restarts). The first to find a
+    /// plan or prove there is none ends all (0 turns the second thread off, 1 starts the
+    /// best-first search at once).
     #[arg(long, value_name = "SHARE", default_value_t = 0.8, value_parser = share)]
     pub best_first_share: f64,
     /// With --strategy geometric-first and --time-limit, on problems with geometric tasks: the

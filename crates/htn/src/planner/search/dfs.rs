@@ -304,6 +304,7 @@ impl<'a, 'o> Search<'a, 'o> {
                 );
                 let (mut bindings, count, more) = self.bindings_after(m, task, Some(&after), max);
                 self.order_bindings(&mut bindings, count);
+                self.goals_first(m, &mut bindings, count);
                 let f = &mut self.htn_frames[h];
                 (f.bindings, f.count, f.more, f.next) = (bindings, count, more, 0);
                 continue;
@@ -316,6 +317,7 @@ impl<'a, 'o> Search<'a, 'o> {
             let m = methods[self.method_order(task, methods.len(), mpos)];
             let (mut bindings, count, more) = self.bindings_after(m, task, None, FIRST_CHUNK);
             self.order_bindings(&mut bindings, count);
+            self.goals_first(m, &mut bindings, count);
             let f = &mut self.htn_frames[h];
             f.mpos = mpos + 1;
             f.method = m;

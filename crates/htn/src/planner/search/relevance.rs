@@ -155,6 +155,55 @@ impl<'a, 'o> Search<'a, 'o> {
         true
     }
 
+    /// Orders the `count` bindings of method `m` (flat) by how many goal literals false now
+    /// its subtasks may achieve under each, most first (stable: ties keep their order). A
+    /// value the goal asks for is then tried before one it does not (Woodworking's colour of
+    /// a part, chosen where nothing but the goal constrains it).
+    pub(super) fn goals_first(&mut self, m: u32, bindings: &mut [u32], count: usize) {
+        if self.c.goal_lits.is_empty() || count < 2 {
+            return;
+        }
+        let stride = bindings.len() / count;
+        let method = &self.c.methods[m as usize];
+        if stride == 0 || method.subtasks.is_empty() {
+            return;
+        }
+        let unsat = self.state.unsat().to_vec();
+        let mut scores = Vec::with_capacity(count);
+        let mut key = Vec::new();
+        for row in bindings.chunks(stride) {
+            let mut score = 0;
+            let mut mask = vec![0u64; unsat.len()];
+            for (t, args) in &method.subtasks {
+                key.clear();
+                key.push(*t);
+                key.extend(args.iter().map(|a| match *a {
+                    CTerm::Var(v) => row.get(v as usize).copied().unwrap_or(UNBOUND),
+                    CTerm::Obj(o) => o,
+                }));
+                let gt = self.gtasks.intern(&key);
+                let may = self.may_achieve(gt);
+                for (w, x) in mask.iter_mut().zip(self.masks.get(may)) {
+                    *w |= x;
+                }
+            }
+            for (u, x) in unsat.iter().zip(&mask) {
+                score += (u & x).count_ones();
+            }
+            scores.push(score);
+        }
+        if scores.iter().all(|&s| s == scores[0]) {
+            return;
+        }
+        let mut order: Vec<usize> = (0..count).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(scores[i]));
+        let sorted: Vec<u32> = order
+            .iter()
+            .flat_map(|&i| bindings[i * stride..(i + 1) * stride].to_vec())
+            .collect();
+        bindings.copy_from_slice(&sorted);
+    }
+
     /// The goal literals (a mask id) that ground task `gt` may achieve, through the methods
     /// whose task arguments and static preconditions fit its arguments. Arguments may be
     /// `WILD` (unknown). Memoised; a task met again while it is being computed counts with its
