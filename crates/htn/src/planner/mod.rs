@@ -62,7 +62,8 @@
 //! depth-first search runs alone for the first `1 - best_first_share` of the time; if it has
 //! found no plan by then, a weighted best-first progression search (`search/bfs.rs`, as
 //! pandaPI's) starts beside it on a second thread, and the first of the two to decide ends
-//! both. The best-first search spends a quarter of its time with the state-free estimate, then, when the relaxed
+//! both. Before it, from 1 s on, that thread runs randomized restarts of the depth-first
+//! search (`search/restarts.rs`). The best-first search spends a quarter of its time with the state-free estimate, then, when the relaxed
 //! composition was ground, the rest with h_add over it (fast estimates solve Transport's
 //! road networks, h_add AssemblyHierarchical). It finds the
 //! plans of learned domains (Freecell) that amount to a blind state-space search, where the

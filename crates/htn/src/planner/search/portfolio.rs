@@ -8,6 +8,10 @@
 //! problems it would have solved a few seconds later. Problems decided in the depth-first
 //! search's share are searched exactly as before, on one thread. The best-first search keeps
 //! to three quarters of the memory limit, so that it never starves the depth-first one.
+//!
+//! Before the best-first search, from 1 s on, the second thread runs randomized restarts of
+//! the depth-first search (`restarts.rs`), under the same memory share; what the depth-first
+//! search decides in its first second is still decided on one thread, deterministically.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -95,7 +99,7 @@ fn second_thread(
         return Ok(None);
     }
     let _stop = StopOn::install(flag.clone());
-    let mut restarts = 0;
+    let mut restarts = (0, 0);
     if let Some(until) = begin.filter(|&b| Instant::now() < b) {
         let mut r = fresh()?;
         let outcome = match r.restarts(until)? {
@@ -112,13 +116,13 @@ fn second_thread(
             }
             return Ok(Some(r));
         }
-        restarts = r.stats.restarts;
+        restarts = (r.stats.restarts, r.stats.nodes);
     }
     if !wait_until(begin, flag) {
         return Ok(None);
     }
     let mut r = fresh()?.run_best_first();
-    r.stats.restarts = restarts;
+    (r.stats.restarts, r.stats.nodes) = (restarts.0, r.stats.nodes + restarts.1);
     if decisive(&r.outcome) {
         flag.store(true, Ordering::Relaxed);
     }
