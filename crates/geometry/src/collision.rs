@@ -744,7 +744,7 @@ impl CollisionChecker {
                         let o = o as usize;
                         let obstacle = &self.obstacles.obstacles[o];
                         if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
-                            && s.hits_cold(&poses[i], &*obstacle.shape.0, &obstacle.pose)
+                            && s.hits_by_gjk(&poses[i], &*obstacle.shape.0, &obstacle.pose)
                             && report(Hit::Obstacle(i, o))
                         {
                             return;
@@ -773,7 +773,7 @@ impl CollisionChecker {
                         if !aabb_overlap(&aabbs[a], &aabbs[b]) {
                             continue;
                         }
-                        if shapes[a].hits_shape_cold(&poses[a], &shapes[b], &poses[b])
+                        if shapes[a].hits_shape_by_gjk(&poses[a], &shapes[b], &poses[b])
                             && report(Hit::SelfPair(a, b))
                         {
                             return;

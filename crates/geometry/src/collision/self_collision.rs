@@ -177,10 +177,8 @@ impl ShapeEntry {
     }
 
     /// [`ShapeEntry::hits`] with the climbing support of a large hull: the bounding box, then
-    /// the exact shapes, each by GJK from its default start. (Starting GJK or a separating-plane
-    /// test from the pair's last separating direction was tried and gave a wrong "apart" in
-    /// one case, not yet understood: not used.)
-    pub(super) fn hits_cold(&self, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> bool {
+    /// the exact shapes, each by GJK from its default start (see `climbing_hull.rs`).
+    pub(super) fn hits_by_gjk(&self, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> bool {
         let (Some(a), Some(b)) = (self.support(), other.as_support_map()) else {
             return self.hits(pose, other, other_pose);
         };
@@ -189,8 +187,8 @@ impl ShapeEntry {
             && gjk(pose, a, other_pose, b)
     }
 
-    /// [`ShapeEntry::hits_shape`] with climbing supports, as [`ShapeEntry::hits_cold`].
-    pub(super) fn hits_shape_cold(
+    /// [`ShapeEntry::hits_shape`] with climbing supports, as [`ShapeEntry::hits_by_gjk`].
+    pub(super) fn hits_shape_by_gjk(
         &self,
         pose: &Pose,
         other: &ShapeEntry,

@@ -418,10 +418,7 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         let method = &self.c.methods[m as usize];
         let mut key = vec![method.task];
-        key.extend(method.task_args.iter().map(|a| match *a {
-            CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
-            CTerm::Obj(o) => o,
-        }));
+        key.extend(bound_terms(&method.task_args, binding));
         self.gtasks.intern(&key)
     }
 
@@ -482,6 +479,14 @@ impl<'a, 'o> Search<'a, 'o> {
         }
         plan
     }
+}
+
+/// The objects `terms` stand for under `binding` (a slot the binding does not reach: unbound).
+fn bound_terms<'b>(terms: &'b [CTerm], binding: &'b [u32]) -> impl Iterator<Item = u32> + 'b {
+    terms.iter().map(|t| match *t {
+        CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
+        CTerm::Obj(o) => o,
+    })
 }
 
 /// The fact key of a shared literal given by name.

@@ -26,7 +26,8 @@ use super::super::{Limit, current_rss_kb};
 use super::heuristic::{Caps, MAX_ACTIONS, MAX_METHODS, Rc};
 use super::limits::drop_in_background;
 use super::{
-    Cell, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, set_growth, table_growth, vec_growth,
+    Cell, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, bound_terms, set_growth, table_growth,
+    vec_growth,
 };
 
 /// An unreachable cost.
@@ -673,10 +674,7 @@ impl<'a, 'o> Search<'a, 'o> {
             }
             key.clear();
             key.push(*t);
-            key.extend(args.iter().map(|a| match *a {
-                CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
-                CTerm::Obj(o) => o,
-            }));
+            key.extend(bound_terms(args, binding));
             let gt = self.gtasks.intern(&key);
             top = self.push_cell(gt, first + i as u32, top, NIL);
             if cell_cost.len() < self.arena.len() {

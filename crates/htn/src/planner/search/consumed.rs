@@ -8,7 +8,7 @@
 
 use super::super::compile::{CEffect, CFormula, CTerm, Compiled};
 use super::super::eval::UNBOUND;
-use super::{NIL, Search};
+use super::{NIL, Search, bound_terms};
 
 /// A literal over an action's parameters: predicate and argument terms.
 type Lit = (u32, Vec<CTerm>);
@@ -139,10 +139,7 @@ impl Search<'_, '_> {
                 continue;
             };
             args.clear();
-            args.extend(targs.iter().map(|t| match *t {
-                CTerm::Var(v) => binding.get(v as usize).copied().unwrap_or(UNBOUND),
-                CTerm::Obj(o) => o,
-            }));
+            args.extend(bound_terms(targs, binding));
             if needed(a as usize, &args, &gone) {
                 return true;
             }

@@ -6,8 +6,9 @@
 use super::super::{PlanError, Strategy};
 use super::frames::{Choice, HtnFrame, HtnId, Key};
 use super::repair::Mode;
-use super::{Cell, FIRST_CHUNK, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, set_growth};
-use crate::planner::compile::CTerm;
+use super::{
+    Cell, FIRST_CHUNK, MAX_CHUNK, NIL, Search, Step, Stop, TreeRec, bound_terms, set_growth,
+};
 use crate::planner::eval::Eval;
 
 /// How many ancestors the loop check compares states with (beyond, only ancestors with no
@@ -355,10 +356,7 @@ impl<'a, 'o> Search<'a, 'o> {
         for (i, (t, args)) in method.subtasks.iter().enumerate().rev() {
             key.clear();
             key.push(*t);
-            key.extend(args.iter().map(|a| match *a {
-                CTerm::Var(v) => binding[v as usize],
-                CTerm::Obj(o) => o,
-            }));
+            key.extend(bound_terms(args, binding));
             let gt = self.gtasks.intern(&key);
             top_cell = self.push_cell(gt, first + i as u32, top_cell, rec);
         }

@@ -4,7 +4,7 @@
 
 use super::super::compile::{CEffect, CFormula, CLit, CTerm, Compiled};
 use super::super::eval::{Eval, UNBOUND};
-use super::Search;
+use super::{Search, bound_terms};
 
 /// An unknown argument in a partially ground task (only in goal-relevance reasoning).
 pub(super) const WILD: u32 = u32::MAX;
@@ -177,10 +177,7 @@ impl<'a, 'o> Search<'a, 'o> {
             for (t, args) in &method.subtasks {
                 key.clear();
                 key.push(*t);
-                key.extend(args.iter().map(|a| match *a {
-                    CTerm::Var(v) => row.get(v as usize).copied().unwrap_or(UNBOUND),
-                    CTerm::Obj(o) => o,
-                }));
+                key.extend(bound_terms(args, row));
                 let gt = self.gtasks.intern(&key);
                 let may = self.may_achieve(gt);
                 for (w, x) in mask.iter_mut().zip(self.masks.get(may)) {
