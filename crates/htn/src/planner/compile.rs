@@ -11,7 +11,8 @@
 //! - `pull_up.rs`: precondition pull-up (methods gain what their subtasks require);
 //! - `late.rs`: parameters (of methods and of the initial task network) bound late, by the
 //!   method of the one subtask that uses them;
-//! - `goals.rs`: the goal's literals and landmarks, and what each task may achieve of them.
+//! - `goals.rs`: the goal's literals and their landmarks (`landmarks.rs`), and what each
+//!   task may achieve of them.
 
 use std::collections::HashMap;
 
@@ -21,6 +22,7 @@ use super::PlanError;
 use crate::budget::Watch;
 
 mod goals;
+mod landmarks;
 mod late;
 mod lower;
 mod names;
@@ -154,8 +156,9 @@ pub(crate) struct Compiled {
     /// Ground literals of the goal's top-level conjunction and their landmarks: fact key and
     /// sign (each once).
     pub goal_lits: Vec<(Vec<u32>, bool)>,
-    /// For a landmark, the literal that needs it (its only achiever requires it).
-    pub goal_parent: Vec<Option<usize>>,
+    /// For a landmark, the literals that need it (each of their achievers requires it);
+    /// empty for a literal of the goal itself.
+    pub goal_parent: Vec<Vec<usize>>,
     /// Per task, the goal literals (bits of `goal_lits`) it may make true.
     pub task_goal_mask: Vec<Vec<u64>>,
 }

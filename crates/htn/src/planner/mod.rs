@@ -33,8 +33,10 @@
 //! - *goal relevance* (`search/relevance.rs`): each suffix of the task network carries the
 //!   set of goal literals its tasks may achieve (per ground task, through the methods whose arguments and
 //!   static preconditions fit); a node where a false goal literal can no longer be achieved is
-//!   a dead end. Landmarks extend the goal: the ground preconditions of a literal's only
-//!   achiever (a parameterless action) must be achieved while that literal is false;
+//!   a dead end. Landmarks extend the goal (`compile/landmarks.rs`): a ground literal that
+//!   every achiever of a goal literal requires (every action subtask, with the constants its
+//!   methods pass, whose effect gives the literal) must hold now or be achievable while a
+//!   literal it serves is false; landmarks of landmarks too, two levels deep;
 //! - *guarded achievers* (`search/guard.rs`): after an action made a goal literal false (or
 //!   changed a fact that guards one), the literal must still be reachable from a task of the
 //!   network through methods whose literals over facts that can only be deleted (or only

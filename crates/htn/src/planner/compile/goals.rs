@@ -2,10 +2,13 @@
 //! which of them it may achieve; the search prunes networks that can no longer achieve a
 //! false goal literal.
 
-use super::{CAction, CEffect, CFormula, CTerm, Compiled};
+use super::landmarks::Achievers;
+use super::{CEffect, CFormula, CTerm, Compiled};
 
 /// At most this many goal literals and landmarks are tracked.
 pub(super) const MAX_GOAL_LITS: usize = 4096;
+/// Landmarks of landmarks are looked for down to this depth below a goal literal.
+const LANDMARK_DEPTH: usize = 2;
 
 /// The goal's ground top-level literals and, per task, which of them the task may achieve
 /// (an over-approximation through all its methods): a node whose remaining task network can
@@ -37,52 +40,29 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
             }
         }
     }
-    // Landmarks: when a positive literal has a single achiever, an action without parameters,
-    // that action's ground positive preconditions must hold at some point before it.
-    let mut parent: Vec<Option<usize>> = vec![None; lits.len()];
+    // Landmarks: what every achiever of a literal requires (`landmarks.rs`), two levels deep.
+    let mut parent: Vec<Vec<usize>> = vec![Vec::new(); lits.len()];
+    let achievers = Achievers::new(c);
     let mut i = 0;
     while i < lits.len() {
-        if lits[i].1 {
-            let p = lits[i].0[0];
-            let achievers: Vec<&CAction> = c
-                .actions
-                .iter()
-                .filter(|a| {
-                    adds_pred(&a.effects, p)
-                        || (a.evaluable.is_some() && c.shared_preds[p as usize])
-                })
-                .collect();
-            if let [a] = achievers[..]
-                && a.n_params == 0
-            {
-                for l in &a.pre {
-                    if let CFormula::Atom(q, args) = &l.f
-                        && lits.len() < MAX_GOAL_LITS
-                    {
-                        let mut key = vec![*q];
-                        if args.iter().all(|t| match t {
-                            CTerm::Obj(o) => {
-                                key.push(*o);
-                                true
-                            }
-                            CTerm::Var(_) => false,
-                        }) && !lits.iter().any(|(k, pos)| *pos && *k == key)
-                        {
-                            lits.push((key, true));
-                            parent.push(Some(i));
-                        }
+        if landmark_depth(&parent, i) < LANDMARK_DEPTH {
+            for l in achievers.landmarks(c, &lits[i]) {
+                match lits.iter().position(|x| *x == l) {
+                    // Already a goal literal: needed whenever false.
+                    Some(j) if parent[j].is_empty() => {}
+                    // A parent always comes before its landmark (no cycles).
+                    Some(j) if j <= i => {}
+                    Some(j) if !parent[j].contains(&i) => parent[j].push(i),
+                    Some(_) => {}
+                    None if lits.len() < MAX_GOAL_LITS => {
+                        lits.push(l);
+                        parent.push(vec![i]);
                     }
+                    None => {}
                 }
             }
         }
         i += 1;
-    }
-    pub(super) fn adds_pred(effs: &[CEffect], p: u32) -> bool {
-        effs.iter().any(|e| match e {
-            CEffect::Add(q, _) => *q == p,
-            CEffect::Forall(_, inner) | CEffect::When(_, inner) => adds_pred(inner, p),
-            _ => false,
-        })
     }
     pub(super) fn effect_mask(effs: &[CEffect], lits: &[(Vec<u32>, bool)], m: &mut [u64]) {
         for e in effs {
@@ -138,4 +118,13 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
     c.goal_lits = lits;
     c.goal_parent = parent;
     c.task_goal_mask = mask;
+}
+
+/// How many landmark levels lie between literal `i` and the goal (0 for a goal literal).
+fn landmark_depth(parent: &[Vec<usize>], i: usize) -> usize {
+    parent[i]
+        .iter()
+        .map(|&j| 1 + landmark_depth(parent, j))
+        .min()
+        .unwrap_or(0)
 }

@@ -111,7 +111,7 @@ impl Guards {
         let mut readers: HashMap<u32, Vec<u32>> = HashMap::new();
         let mut any = false;
         for (i, (key, positive)) in c.goal_lits.iter().enumerate() {
-            let g = if c.goal_parent[i].is_some() {
+            let g = if !c.goal_parent[i].is_empty() {
                 None
             } else {
                 env.graph(key, *positive, &action_task, &parents, state)

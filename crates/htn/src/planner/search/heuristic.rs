@@ -580,7 +580,7 @@ impl Rc {
             .zip(&c.goal_parent)
             .filter(|((key, positive), parent)| {
                 *positive
-                    && parent.is_none()
+                    && parent.is_empty()
                     && !c
                         .static_preds
                         .get(key[0] as usize)

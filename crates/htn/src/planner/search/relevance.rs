@@ -137,22 +137,23 @@ impl<'a, 'o> Search<'a, 'o> {
             while bad != 0 {
                 let i = w * 64 + bad.trailing_zeros() as usize;
                 bad &= bad - 1;
-                // A landmark is needed only while every literal it serves is still false.
-                let mut needed = true;
-                let mut p = self.c.goal_parent[i];
-                while let Some(j) = p {
-                    if unsat[j / 64] & (1 << (j % 64)) == 0 {
-                        needed = false;
-                        break;
-                    }
-                    p = self.c.goal_parent[j];
-                }
+                let needed = self.landmark_needed(i, unsat);
                 if needed {
                     return false;
                 }
             }
         }
         true
+    }
+
+    /// Whether literal `i`, false now, must still be achieved: a goal literal always; a
+    /// landmark while some literal it serves is false and itself needed.
+    fn landmark_needed(&self, i: usize, unsat: &[u64]) -> bool {
+        let parents = &self.c.goal_parent[i];
+        parents.is_empty()
+            || parents
+                .iter()
+                .any(|&j| unsat[j / 64] & (1 << (j % 64)) != 0 && self.landmark_needed(j, unsat))
     }
 
     /// Orders the `count` bindings of method `m` (flat) by how many goal literals false now
