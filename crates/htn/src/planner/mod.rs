@@ -36,7 +36,7 @@
 //!   a dead end. Landmarks extend the goal (`compile/landmarks.rs`): a ground literal that
 //!   every achiever of a goal literal requires (every action subtask, with the constants its
 //!   methods pass, whose effect gives the literal) must hold now or be achievable while a
-//!   literal it serves is false; landmarks of landmarks too, two levels deep;
+//!   literal it serves is false; landmarks of landmarks too;
 //! - *guarded achievers* (`search/guard.rs`): after an action made a goal literal false (or
 //!   changed a fact that guards one), the literal must still be reachable from a task of the
 //!   network through methods whose literals over facts that can only be deleted (or only

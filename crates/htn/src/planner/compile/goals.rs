@@ -7,8 +7,9 @@ use super::{CEffect, CFormula, CTerm, Compiled};
 
 /// At most this many goal literals and landmarks are tracked.
 pub(super) const MAX_GOAL_LITS: usize = 4096;
-/// Landmarks of landmarks are looked for down to this depth below a goal literal.
-const LANDMARK_DEPTH: usize = 2;
+/// Landmarks of landmarks are looked for down to this depth below a goal literal (Monroe's
+/// progress literals `l1`..`l8` form a chain).
+const LANDMARK_DEPTH: usize = 64;
 
 /// The goal's ground top-level literals and, per task, which of them the task may achieve
 /// (an over-approximation through all its methods): a node whose remaining task network can
@@ -40,12 +41,13 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
             }
         }
     }
-    // Landmarks: what every achiever of a literal requires (`landmarks.rs`), two levels deep.
+    // Landmarks: what every achiever of a literal requires (`landmarks.rs`), and theirs.
     let mut parent: Vec<Vec<usize>> = vec![Vec::new(); lits.len()];
+    let mut depth = vec![0; lits.len()];
     let achievers = Achievers::new(c);
     let mut i = 0;
     while i < lits.len() {
-        if landmark_depth(&parent, i) < LANDMARK_DEPTH {
+        if depth[i] < LANDMARK_DEPTH {
             for l in achievers.landmarks(c, &lits[i]) {
                 match lits.iter().position(|x| *x == l) {
                     // Already a goal literal: needed whenever false.
@@ -57,6 +59,7 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
                     None if lits.len() < MAX_GOAL_LITS => {
                         lits.push(l);
                         parent.push(vec![i]);
+                        depth.push(depth[i] + 1);
                     }
                     None => {}
                 }
@@ -118,13 +121,4 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
     c.goal_lits = lits;
     c.goal_parent = parent;
     c.task_goal_mask = mask;
-}
-
-/// How many landmark levels lie between literal `i` and the goal (0 for a goal literal).
-fn landmark_depth(parent: &[Vec<usize>], i: usize) -> usize {
-    parent[i]
-        .iter()
-        .map(|&j| 1 + landmark_depth(parent, j))
-        .min()
-        .unwrap_or(0)
 }
