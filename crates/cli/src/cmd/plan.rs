@@ -1,5 +1,6 @@
 //! `htngtp plan`: plan an HDDL problem with the HTN planner, validate the plan, print it.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -160,6 +161,16 @@ impl StrategyArg {
     }
 }
 
+/// What `plan --json` prints: the search result with the plan text and how it ended.
+#[derive(serde::Serialize)]
+struct JsonReport<'a> {
+    #[serde(flatten)]
+    result: &'a htn::planner::SearchResult,
+    plan_text: Option<&'a str>,
+    peak_memory_kb: u64,
+    validated: bool,
+}
+
 pub fn run(args: Args) -> anyhow::Result<u8> {
     if args.exit_with_stdin {
         exit_when_stdin_closes();
@@ -208,19 +219,20 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         };
         return crate::cmd::geo::run_plan(&domain, &problem, began, scene, options, oracle, &out);
     }
-    let result = htn::planner::plan(&domain, &problem, &options, None)?;
+    let mut result = htn::planner::plan(&domain, &problem, &options, None)?;
     let mut plan_text = None;
     if let Outcome::Found { plan } = &result.outcome {
         let checked = htn::validate::validate(&domain, &problem, plan, &[]);
-        if let (Err(e), Some(_)) = (&checked, htn::budget::tripped()) {
+        if let (Err(e), Some(limit)) = (&checked, htn::budget::tripped()) {
             // The limits cover the validation too: a plan not validated is not printed.
             eprintln!("{}", e.0);
-            return Ok(exit::LIMIT);
+            result.outcome = Outcome::LimitReached { limit };
+        } else {
+            checked.context(
+                "BUG: the planner returned a plan that the validator rejects; please report it",
+            )?;
+            plan_text = Some(plan.to_competition_format());
         }
-        checked.context(
-            "BUG: the planner returned a plan that the validator rejects; please report it",
-        )?;
-        plan_text = Some(plan.to_competition_format());
     }
     let peak_kb = htn::planner::peak_rss_kb().max(result.stats.peak_memory_kb);
     let code = match &result.outcome {
@@ -229,11 +241,17 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         Outcome::LimitReached { .. } => exit::LIMIT,
     };
     if args.json {
-        let mut v = serde_json::to_value(&result)?;
-        v["plan_text"] = serde_json::json!(plan_text);
-        v["peak_memory_kb"] = serde_json::json!(peak_kb);
-        v["validated"] = serde_json::json!(plan_text.is_some());
-        println!("{}", serde_json::to_string(&v)?);
+        // Written as it is serialized: a plan of 262,143 actions is 105 MB of JSON.
+        let report = JsonReport {
+            result: &result,
+            plan_text: plan_text.as_deref(),
+            peak_memory_kb: peak_kb,
+            validated: plan_text.is_some(),
+        };
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        serde_json::to_writer(&mut out, &report)?;
+        writeln!(out)?;
+        out.flush()?;
     } else {
         if let Some(t) = &plan_text {
             print!("{t}");

@@ -4,7 +4,7 @@
 use crate::model::{Domain, Problem};
 use crate::plan::Plan;
 
-use super::Fault;
+use super::{Fault, within_budget};
 
 /// `message` with every name between backticks, double quotes or parentheses spelled as
 /// declared (the checks run on case-folded names; messages should show the files' spelling).
@@ -78,7 +78,10 @@ pub(super) fn exact_names(domain: &Domain, problem: &Problem, plan: &Plan) -> Re
                 .iter()
                 .map(|d| (d.id, &d.task, &d.args, Some(&d.method))),
         );
-    for (id, name, args, method) in lines {
+    for (k, (id, name, args, method)) in lines.enumerate() {
+        if k % 1024 == 1023 {
+            within_budget()?;
+        }
         if sp.tasks.declared(name) != Some(name.as_str()) {
             return Err(Fault(format!(
                 "id {id}: task `{name}` is not declared in the domain{}",

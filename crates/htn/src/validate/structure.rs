@@ -2,21 +2,19 @@
 //! plan's order), the root against the initial task network, and each decomposition line
 //! against a method of its task under one binding of the method's parameters.
 
-use std::collections::{HashMap, HashSet};
-
 use crate::model::{Domain, Problem, Term, TypedName};
 use crate::plan::Plan;
 
 use super::world::World;
-use super::{Env, Fault, fault};
+use super::{Env, FastMap, FastSet, Fault, fault, within_budget};
 
 /// The plan's ids and tree, checked.
 pub(super) struct Tree<'p> {
     plan: &'p Plan,
     /// Action id to its position in the plan.
-    action_at: HashMap<u32, usize>,
+    action_at: FastMap<u32, usize>,
     /// Decomposed task id to its line.
-    dec_of: HashMap<u32, usize>,
+    dec_of: FastMap<u32, usize>,
     /// (decomposition line, leaf position) in depth-first order: each method's precondition
     /// is checked before the action at that position.
     pub(super) dec_pos: Vec<(usize, usize)>,
@@ -26,13 +24,13 @@ impl<'p> Tree<'p> {
     /// Checks that ids are unique, every id is used exactly once in the tree rooted at
     /// `root`, and the leaves, left to right, are the plan's actions in order.
     pub(super) fn new(plan: &'p Plan) -> Result<Tree<'p>, Fault> {
-        let mut action_at: HashMap<u32, usize> = HashMap::new();
+        let mut action_at: FastMap<u32, usize> = FastMap::default();
         for (i, a) in plan.actions.iter().enumerate() {
             if action_at.insert(a.id, i).is_some() {
                 return fault(format!("id {} is used by two actions", a.id));
             }
         }
-        let mut dec_of: HashMap<u32, usize> = HashMap::new();
+        let mut dec_of: FastMap<u32, usize> = FastMap::default();
         for (i, d) in plan.decompositions.iter().enumerate() {
             if action_at.contains_key(&d.id) {
                 return fault(format!(
@@ -46,13 +44,16 @@ impl<'p> Tree<'p> {
         }
 
         // The tree: every id used exactly once, leaves in order.
-        let mut used: HashSet<u32> = HashSet::new();
+        let mut used: FastSet<u32> = FastSet::default();
         let mut leaves: Vec<u32> = Vec::new();
         // (decomposition index, leaf position) in depth-first order.
         let mut dec_pos: Vec<(usize, usize)> = Vec::new();
         // Depth first, left to right, with an explicit stack (trees can be very deep).
         let mut todo: Vec<u32> = plan.root.iter().rev().copied().collect();
         while let Some(id) = todo.pop() {
+            if used.len() % 4096 == 4095 {
+                within_budget()?;
+            }
             if !used.insert(id) {
                 return fault(format!("id {id} occurs twice in the decomposition tree"));
             }
@@ -150,6 +151,9 @@ impl<'p> Tree<'p> {
         let plan = self.plan;
         let mut bindings: Vec<Env> = vec![Env::default(); plan.decompositions.len()];
         for (i, d) in plan.decompositions.iter().enumerate() {
+            if i % 256 == 255 {
+                within_budget()?;
+            }
             let Some(task) = domain.tasks.iter().find(|t| t.name == d.task) else {
                 return fault(format!(
                     "task {} `{}` is not an abstract task of the domain",
