@@ -4,7 +4,7 @@
 use crate::model::{Domain, Problem};
 use crate::plan::Plan;
 
-use super::{Fault, within_budget};
+use super::{FastMap, Fault, within_budget};
 
 /// `message` with every name between backticks, double quotes or parentheses spelled as
 /// declared (the checks run on case-folded names; messages should show the files' spelling).
@@ -61,6 +61,7 @@ pub(super) fn respell_message(domain: &Domain, problem: &Problem, message: &str)
 /// as that verifier drops them (with a warning). Returns the plan case-folded for the checks.
 pub(super) fn exact_names(domain: &Domain, problem: &Problem, plan: &Plan) -> Result<Plan, Fault> {
     let sp = &domain.spelling;
+    let counts = param_counts(domain);
     let object = |a: &str| {
         problem
             .spelling
@@ -88,7 +89,7 @@ pub(super) fn exact_names(domain: &Domain, problem: &Problem, plan: &Plan) -> Re
                 spelled_as(sp.tasks.declared(name))
             )));
         }
-        let params = declared_params(domain, name);
+        let params = declared_params(&counts, name);
         if let Some(a) = args.iter().take(params).find(|a| !object(a)) {
             let declared = problem
                 .spelling
@@ -111,23 +112,35 @@ pub(super) fn exact_names(domain: &Domain, problem: &Problem, plan: &Plan) -> Re
     }
     let mut folded = plan.lowercased();
     for a in &mut folded.actions {
-        a.args.truncate(declared_params(domain, &a.name));
+        a.args.truncate(declared_params(&counts, &a.name));
     }
     for d in &mut folded.decompositions {
-        d.args.truncate(declared_params(domain, &d.task));
+        d.args.truncate(declared_params(&counts, &d.task));
     }
     Ok(folded)
 }
 
+/// Per task and action name (lower case, as the domain keeps them), how many parameters it
+/// declares (a task's count if a task and an action share the name).
+fn param_counts(domain: &Domain) -> FastMap<&str, usize> {
+    let mut counts = FastMap::default();
+    for a in &domain.actions {
+        counts.insert(a.name.as_str(), a.params.len());
+    }
+    for t in &domain.tasks {
+        counts.insert(t.name.as_str(), t.params.len());
+    }
+    counts
+}
+
 /// How many parameters the task or action `name` (any case) declares; `usize::MAX` if none is
 /// declared.
-fn declared_params(domain: &Domain, name: &str) -> usize {
-    let name = name.to_ascii_lowercase();
-    let task = domain.tasks.iter().find(|t| t.name == name);
-    let action = domain.actions.iter().find(|a| a.name == name);
-    task.map(|t| t.params.len())
-        .or(action.map(|a| a.params.len()))
-        .unwrap_or(usize::MAX)
+fn declared_params(counts: &FastMap<&str, usize>, name: &str) -> usize {
+    let found = match counts.get(name) {
+        Some(&n) => Some(n),
+        None => counts.get(name.to_ascii_lowercase().as_str()).copied(),
+    };
+    found.unwrap_or(usize::MAX)
 }
 
 /// ` (declared as `X`)` when a declaration differs only in case.

@@ -1,7 +1,7 @@
 //! The validator's own world: a name-based state (facts and fluent values), formula
 //! evaluation with quantifiers over the objects of a type, and action execution.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 
 use crate::model::{
     CompareOp, Domain, Effect, Formula, Method, NumExpr, NumericEffectOp, OBJECT_TYPE, Problem,
@@ -15,9 +15,9 @@ pub(super) struct World<'a> {
     domain: &'a Domain,
     /// Object to its types (declared type and all ancestors, and `object`); objects of one
     /// declared type share the set.
-    types: HashMap<String, std::rc::Rc<HashSet<String>>>,
+    types: FastMap<String, std::rc::Rc<FastSet<String>>>,
     /// Type to its objects.
-    objects_of: HashMap<String, Vec<String>>,
+    objects_of: FastMap<String, Vec<String>>,
 }
 
 /// The state: facts as `[predicate, args..]` keys, indexed by predicate; fluent values.
@@ -59,11 +59,11 @@ impl<'a> World<'a> {
                 .extend(t.parents.iter().map(String::as_str));
         }
         // Each declared type's ancestor set, computed once.
-        let mut ancestors: HashMap<&str, std::rc::Rc<HashSet<String>>> = HashMap::new();
-        let mut types: HashMap<String, std::rc::Rc<HashSet<String>>> = HashMap::new();
+        let mut ancestors: HashMap<&str, std::rc::Rc<FastSet<String>>> = HashMap::new();
+        let mut types: FastMap<String, std::rc::Rc<FastSet<String>>> = FastMap::default();
         for o in domain.constants.iter().chain(&problem.objects) {
             let set = ancestors.entry(o.ty.as_str()).or_insert_with(|| {
-                let mut set = HashSet::new();
+                let mut set = FastSet::default();
                 let mut todo = vec![o.ty.as_str(), OBJECT_TYPE];
                 while let Some(t) = todo.pop() {
                     if set.insert(t.to_string())
@@ -77,7 +77,7 @@ impl<'a> World<'a> {
             // A name declared twice (a constant and an object) has the types of both.
             match types.get_mut(&o.name) {
                 Some(had) => {
-                    let mut both: HashSet<String> = (**had).clone();
+                    let mut both: FastSet<String> = (**had).clone();
                     both.extend(set.iter().cloned());
                     *had = std::rc::Rc::new(both);
                 }
@@ -86,7 +86,7 @@ impl<'a> World<'a> {
                 }
             }
         }
-        let mut objects_of: HashMap<String, Vec<String>> = HashMap::new();
+        let mut objects_of: FastMap<String, Vec<String>> = FastMap::default();
         let mut names: Vec<&String> = types.keys().collect();
         names.sort();
         for o in names {
