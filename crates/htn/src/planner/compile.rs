@@ -298,6 +298,6 @@ pub(crate) fn compile(
     b.c.static_preds = static_predicates(&b.c);
     pull_up(&mut b.c);
     bind_late(&mut b.c);
-    goal_relevance(&mut b.c);
+    goal_relevance(&mut b.c, watch);
     Ok(b.c)
 }

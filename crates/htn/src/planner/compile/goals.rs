@@ -4,6 +4,7 @@
 
 use super::landmarks::Achievers;
 use super::{CEffect, CFormula, CTerm, Compiled};
+use crate::budget::Watch;
 
 /// At most this many goal literals and landmarks are tracked.
 pub(super) const MAX_GOAL_LITS: usize = 4096;
@@ -14,7 +15,7 @@ const LANDMARK_DEPTH: usize = 64;
 /// The goal's ground top-level literals and, per task, which of them the task may achieve
 /// (an over-approximation through all its methods): a node whose remaining task network can
 /// achieve no false goal literal is a dead end.
-pub(super) fn goal_relevance(c: &mut Compiled) {
+pub(super) fn goal_relevance(c: &mut Compiled, watch: &Watch) {
     let mut lits = Vec::new();
     let top: Vec<&CFormula> = match &c.goal {
         CFormula::And(xs) => xs.iter().collect(),
@@ -46,7 +47,8 @@ pub(super) fn goal_relevance(c: &mut Compiled) {
     let mut depth = vec![0; lits.len()];
     let achievers = Achievers::new(c);
     let mut i = 0;
-    while i < lits.len() {
+    // Landmarks only prune: at a limit the search starts without the rest (and stops at once).
+    while i < lits.len() && watch.check().is_none() {
         if depth[i] < LANDMARK_DEPTH {
             for l in achievers.landmarks(c, &lits[i]) {
                 match lits.iter().position(|x| *x == l) {
