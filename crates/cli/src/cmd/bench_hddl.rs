@@ -207,7 +207,7 @@ fn run_one(exe: &Path, args: &Args, job: &Job) -> Row {
         Err(_) => {
             row.status = match status.code().and_then(|c| u8::try_from(c).ok()) {
                 Some(exit::BAD_INPUT) => "bad-input".into(),
-                // A limit passed while reading, parsing, compiling or validating: no JSON.
+                // A limit passed while reading, parsing or compiling: no JSON.
                 Some(exit::LIMIT) => "limit-reached".into(),
                 _ => "crash".into(),
             };
