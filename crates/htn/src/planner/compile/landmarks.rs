@@ -13,6 +13,7 @@
 
 use std::collections::{HashMap, HashSet};
 
+use super::statics::Changes;
 use super::{CAction, CEffect, CFormula, CTerm, Compiled};
 
 /// A ground literal: fact key (predicate, objects) and sign.
@@ -32,6 +33,19 @@ impl Achievers {
     /// Collects each distinct (action, constants) written as a subtask, indexed by the
     /// predicates its effects change.
     pub(super) fn new(c: &Compiled) -> Achievers {
+        // Per action, the predicates its effects change.
+        let changed: Vec<Vec<u32>> = c
+            .actions
+            .iter()
+            .map(|a| {
+                let mut ch = Changes::new(c.preds.len());
+                ch.mark(&a.effects);
+                (0..)
+                    .zip(ch.preds)
+                    .filter_map(|(p, x)| x.then_some(p))
+                    .collect()
+            })
+            .collect();
         let mut seen = HashSet::new();
         let mut by_pred: HashMap<u32, Vec<Occurrence>> = HashMap::new();
         for m in &c.methods {
@@ -51,11 +65,7 @@ impl Achievers {
                 if !seen.insert((a, slots.clone())) {
                     continue;
                 }
-                let mut preds = Vec::new();
-                changed_preds(&act.effects, &mut preds);
-                preds.sort_unstable();
-                preds.dedup();
-                for p in preds {
+                for &p in &changed[a as usize] {
                     by_pred.entry(p).or_default().push((a, slots.clone()));
                 }
             }
@@ -153,9 +163,7 @@ impl Achievers {
         }
         Some(out)
     }
-}
 
-impl Achievers {
     /// Whether an initial fact of `q` fits `terms` where `b` binds them.
     fn static_match(&self, q: u32, terms: &[CTerm], b: &[Option<u32>]) -> bool {
         self.init_by_pred.get(&q).is_some_and(|facts| {
@@ -183,17 +191,6 @@ fn equal_constants(pre: &[super::CLit], slots: usize) -> Vec<Option<u32>> {
         }
     }
     fixed
-}
-
-/// The predicates `effs` add or delete.
-fn changed_preds(effs: &[CEffect], out: &mut Vec<u32>) {
-    for e in effs {
-        match e {
-            CEffect::Add(p, _) | CEffect::Del(p, _) => out.push(*p),
-            CEffect::Forall(_, inner) | CEffect::When(_, inner) => changed_preds(inner, out),
-            CEffect::Num(..) => {}
-        }
-    }
 }
 
 /// Each binding (from `slots`) under which an effect of `effs` makes `key` true (`positive`)
