@@ -42,7 +42,9 @@ use parry3d::shape::{Shape, SharedShape};
 use crate::agent::{AgentModel, ModelError};
 
 mod climbing_hull;
+mod motion;
 mod self_collision;
+pub use motion::MotionCheck;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
 
 /// One piece of static scene geometry.
@@ -677,10 +679,79 @@ impl CollisionChecker {
         }
     }
 
+    /// Poses the agent's links and shapes for `q` into `s`, through the cache of
+    /// [`CollisionChecker::set_fixed_joints`] where `q` matches it. Returns the shapes and the
+    /// link pairs that may move (all of them without the cache) and the cache used.
+    fn pose_into<'a>(
+        &'a self,
+        q: &[f32],
+        s: &mut Scratch,
+    ) -> (
+        &'a [u16],
+        &'a [self_collision::PairGroup],
+        Option<&'a FixedJoints>,
+    ) {
+        let model = &self.agent.model;
+        let shapes = &self.agent.shapes;
+        let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
+        let Scratch {
+            links,
+            poses,
+            aabbs,
+            centres,
+            ..
+        } = s;
+        let (moving, groups): (&[u16], &[self_collision::PairGroup]) = match fixed {
+            Some(f) => {
+                links.clear();
+                links.extend_from_slice(&f.link_poses);
+                for (j, joint) in model.joints().iter().enumerate() {
+                    if f.moving_link[j + 1] {
+                        links[j + 1] =
+                            links[joint.parent] * joint.transform(model.joint_value(j, q));
+                    }
+                }
+                poses.clear();
+                poses.extend_from_slice(&f.shape_poses);
+                aabbs.clear();
+                aabbs.extend_from_slice(&f.shape_aabbs);
+                for &i in &f.moving_shapes {
+                    let (i, s) = (i as usize, &shapes[i as usize]);
+                    poses[i] = links[s.link] * s.local_pose;
+                    aabbs[i] = s.aabb(&poses[i]);
+                }
+                (&f.moving_shapes, &f.moving_groups)
+            }
+            None => {
+                model.link_poses_into(self.base, q, links);
+                poses.clear();
+                aabbs.clear();
+                for s in shapes {
+                    let p = links[s.link] * s.local_pose;
+                    poses.push(p);
+                    aabbs.push(s.aabb(&p));
+                }
+                (&self.agent.all_shapes, &self.agent.groups)
+            }
+        };
+        let spheres = &self.agent.link_spheres;
+        centres.clear();
+        centres.extend(links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
+        (moving, groups, fixed)
+    }
+
     /// Runs the checks, calling `report` for each collision until it returns true.
     fn check(&self, q: &[f32], mut report: impl FnMut(Hit) -> bool) {
         SCRATCH.with(|scratch| {
             let mut guard = scratch.borrow_mut();
+            let (moving, groups, fixed) = self.pose_into(q, &mut guard);
+            if let Some(f) = fixed {
+                for &h in &f.static_hits {
+                    if report(h) {
+                        return;
+                    }
+                }
+            }
             let Scratch {
                 links,
                 poses,
@@ -688,47 +759,7 @@ impl CollisionChecker {
                 candidates,
                 centres,
             } = &mut *guard;
-            let model = &self.agent.model;
             let shapes = &self.agent.shapes;
-            let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
-            let (moving, groups): (&[u16], &[self_collision::PairGroup]) = match fixed {
-                Some(f) => {
-                    for &h in &f.static_hits {
-                        if report(h) {
-                            return;
-                        }
-                    }
-                    links.clear();
-                    links.extend_from_slice(&f.link_poses);
-                    for (j, joint) in model.joints().iter().enumerate() {
-                        if f.moving_link[j + 1] {
-                            links[j + 1] =
-                                links[joint.parent] * joint.transform(model.joint_value(j, q));
-                        }
-                    }
-                    poses.clear();
-                    poses.extend_from_slice(&f.shape_poses);
-                    aabbs.clear();
-                    aabbs.extend_from_slice(&f.shape_aabbs);
-                    for &i in &f.moving_shapes {
-                        let (i, s) = (i as usize, &shapes[i as usize]);
-                        poses[i] = links[s.link] * s.local_pose;
-                        aabbs[i] = s.aabb(&poses[i]);
-                    }
-                    (&f.moving_shapes, &f.moving_groups)
-                }
-                None => {
-                    model.link_poses_into(self.base, q, links);
-                    poses.clear();
-                    aabbs.clear();
-                    for s in shapes {
-                        let p = links[s.link] * s.local_pose;
-                        poses.push(p);
-                        aabbs.push(s.aabb(&p));
-                    }
-                    (&self.agent.all_shapes, &self.agent.groups)
-                }
-            };
             // Agent against the scene: first the obstacles near the moving shapes, then per shape.
             if !self.obstacles.is_empty() && !moving.is_empty() {
                 let mut all = aabbs[moving[0] as usize];
@@ -756,8 +787,6 @@ impl CollisionChecker {
             if self.self_collision {
                 let spheres = &self.agent.link_spheres;
                 let pairs = &self.agent.pairs;
-                centres.clear();
-                centres.extend(links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
                 for g in groups {
                     let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
                     let d = centres[g.a as usize] - centres[g.b as usize];

@@ -479,3 +479,83 @@ fn srdf_disabled_pairs_are_not_checked() {
         .expect("the palms allowed");
     assert_eq!(pair.reason, AllowedReason::Srdf);
 }
+
+/// A motion check by conservative advancement agrees with dense sampling: a motion on which
+/// 4,000 evenly spaced configurations find a collision is reported, one on which they find
+/// none is free, with or without the fixed-joints cache; a 2 mm slab that the arm sweeps
+/// through between two free ends is found.
+#[test]
+fn motion_checks_find_what_dense_sampling_finds() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let template = model.default_configuration().into_vec();
+    let obstacles = Arc::new(StaticObstacles::new(vec![
+        boxed(
+            "table",
+            Vector::new(0.95, -0.4, 0.3),
+            Vector::new(0.4, 0.25, 0.3),
+        ),
+        boxed(
+            "slab",
+            Vector::new(0.8, -0.45, 0.9),
+            Vector::new(0.3, 0.001, 0.3),
+        ),
+    ]));
+    let chain = model.chain("right_arm").unwrap();
+    let book = SharedShape::cuboid(0.1, 0.07, 0.03);
+    let held =
+        HeldObject::new(&model, "book", book, "r_gripper_tool_frame", Pose::IDENTITY).unwrap();
+    let full = CollisionChecker::new(m.clone(), obstacles, Pose::IDENTITY).with_held_object(held);
+    let mut fast = full.clone();
+    fast.set_fixed_joints(&template, &chain.dofs);
+    let mut rng = fastrand::Rng::with_seed(5);
+    let (mut hit, mut free) = (0, 0);
+    let mut q = template.clone();
+    let mut a = template.clone();
+    for k in 0..300 {
+        let r = model.random_configuration(&mut rng).into_vec();
+        let mut b = template.clone();
+        for &d in &chain.dofs {
+            a[d] = r[d];
+            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
+        }
+        if !full.is_config_free(&a) {
+            continue;
+        }
+        let sampled = (1..=4000).any(|s| {
+            let t = s as f32 / 4000.0;
+            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(&b)) {
+                *v = x + t * (y - x);
+            }
+            !full.is_config_free(&q)
+        });
+        let checker = if k % 2 == 0 { &full } else { &fast };
+        let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
+        // (A contact briefer than the sampling's step would be found only by the motion check:
+        // none among these.)
+        assert_eq!(
+            found, sampled,
+            "motion {k}: dense sampling finds a collision: {sampled}"
+        );
+        if sampled {
+            hit += 1;
+        } else {
+            free += 1;
+        }
+    }
+    assert!(hit > 20 && free > 20, "{hit} colliding, {free} free");
+    // The right arm swung through the slab: both ends free, the middle not.
+    let swing = |yaw: f32| {
+        let mut q = template.clone();
+        q[model.dof_index("r_shoulder_pan_joint").unwrap()] = yaw;
+        q
+    };
+    let (a, b) = (swing(-0.1), swing(-0.9));
+    assert!(full.is_config_free(&a) && full.is_config_free(&b));
+    let c = fast.check_motion(&a, &b, 1e-4);
+    assert!(
+        matches!(&c.contact, Some(Contact::Obstacle { obstacle, .. }
+            | Contact::HeldObstacle { obstacle, .. }) if obstacle == "slab"),
+        "{c:?}"
+    );
+}

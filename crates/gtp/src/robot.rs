@@ -536,9 +536,10 @@ impl<'a> ArmMotion<'a> {
     }
 
     /// A straight move of the tool from its pose at `from` by `offset` (world frame), in
-    /// `steps` inverse-kinematics steps seeded one from the other; every edge checked at the
-    /// certification resolution. `extra` is an additional validity check on the arm values (the
-    /// gripper against the object it straddles, for example). The error says what failed.
+    /// `steps` inverse-kinematics steps seeded one from the other; every edge certified free by
+    /// [`ArmMotion::motion_collision`]. `extra` is an additional validity check on the arm
+    /// values (the gripper against the object it straddles, for example), at the certification
+    /// resolution. The error says what failed.
     #[allow(clippy::too_many_arguments)]
     pub fn straight(
         &self,
@@ -576,21 +577,20 @@ impl<'a> ArmMotion<'a> {
             if self.arm.space.max_delta(&prev, &q) > 0.6 {
                 return Err("the arm would have to swing round".into());
             }
-            let mut bad = None;
-            let mut valid = |qa: &[f32]| {
-                set_arm_values(self.arm, &mut full, qa);
-                if let Some(c) = checker.first_collision(&full) {
-                    bad = Some(c.to_string());
-                    false
-                } else if !extra(qa) {
-                    bad = Some("the gripper touches the object".into());
-                    false
-                } else {
-                    true
-                }
-            };
-            if !rrt::edge_valid(&self.arm.space, &prev, &q, fine, &mut valid, checks) {
-                return Err(bad.unwrap_or_default());
+            let mut extra_holds = |qa: &[f32]| extra(qa);
+            let mut none = 0;
+            if !rrt::edge_valid(
+                &self.arm.space,
+                &prev,
+                &q,
+                fine,
+                &mut extra_holds,
+                &mut none,
+            ) {
+                return Err("the gripper touches the object".into());
+            }
+            if let Some(c) = self.motion_collision(&checker, &prev, &q, checks) {
+                return Err(c);
             }
             waypoints.push(q);
         }
@@ -611,9 +611,45 @@ impl<'a> ArmMotion<'a> {
             set_arm_values(self.arm, &mut full, qa);
             checker.is_config_free(&full)
         };
-        rrt::plan(&self.arm.space, from, to, valid, params, rng).map_err(|(e, _)| e)
+        let mut certify = |a: &[f32], b: &[f32], checks: &mut usize| {
+            self.motion_collision(&checker, a, b, checks).is_none()
+        };
+        rrt::plan_certified(
+            &self.arm.space,
+            from,
+            to,
+            valid,
+            Some(&mut certify),
+            params,
+            rng,
+        )
+        .map_err(|(e, _)| e)
+    }
+
+    /// The first collision (in words) on the straight joint-space motion of the arm from
+    /// values `a` to `b` (the short way round for continuous joints), found by `checker` (an
+    /// [`ArmMotion::arm_checker`]) by conservative advancement: the whole motion is checked,
+    /// not sampled configurations. Counts the configurations posed in `checks`.
+    pub fn motion_collision(
+        &self,
+        checker: &CollisionChecker,
+        a: &[f32],
+        b: &[f32],
+        checks: &mut usize,
+    ) -> Option<String> {
+        let mut step = vec![0.0; a.len()];
+        self.arm.space.delta(a, b, &mut step);
+        let end: Vec<f32> = a.iter().zip(&step).map(|(x, d)| x + d).collect();
+        let r = checker.check_motion(&self.full(a), &self.full(&end), MOTION_FLOOR);
+        *checks += r.configurations;
+        r.contact.map(|c| c.to_string())
     }
 }
+
+/// When a motion is certified (see [`ArmMotion::motion_collision`]), bodies nearer than this
+/// (metres) are re-measured every this much of their relative motion: a contact between two
+/// measurements is at most half as deep, far under what a re-check or a checker tolerates.
+pub const MOTION_FLOOR: f32 = 2e-4;
 
 /// An arm's chain extended to its tool frame, and the tool frame: the agent's hand link (the
 /// scene's `hands`, by default the SRDF chain tips) that hangs below the chain's tip, such as a

@@ -506,19 +506,40 @@ fn connect(
 ///
 /// `valid` says whether one configuration is free (collision checks, extra constraints). The
 /// direct edge is tried first. Both ends are checked. Deterministic for the state of `rng`.
-/// A path whose tree edges fail the certification (an edge cut a thin obstacle between its
-/// coarse checks) is searched for again with new trees, up to [`CERTIFY_ATTEMPTS`] times.
+/// The path's edges are certified by re-checking each at `resolution / certify_factor`; a path
+/// whose tree edges fail the certification (an edge cut a thin obstacle between its coarse
+/// checks) is searched for again with new trees, up to [`CERTIFY_ATTEMPTS`] times.
 pub fn plan(
     space: &JointSpace,
     start: &[f32],
     goal: &[f32],
+    valid: impl FnMut(&[f32]) -> bool,
+    params: &RrtParams,
+    rng: &mut fastrand::Rng,
+) -> Result<(JointPath, RrtStats), (RrtError, RrtStats)> {
+    plan_certified(space, start, goal, valid, None, params, rng)
+}
+
+/// Certifies a straight edge `a -> b` of a path found (the arm values at its ends), counting
+/// what it checked: a continuous alternative to re-checking the edge at a finer resolution.
+pub type EdgeCertifier<'a> = &'a mut dyn FnMut(&[f32], &[f32], &mut usize) -> bool;
+
+/// [`plan`], with the path's edges certified by `certify` where given (instead of being
+/// re-checked at `resolution / certify_factor`; `certify_factor <= 1` still turns
+/// certification off).
+pub fn plan_certified(
+    space: &JointSpace,
+    start: &[f32],
+    goal: &[f32],
     mut valid: impl FnMut(&[f32]) -> bool,
+    mut certify: Option<EdgeCertifier<'_>>,
     params: &RrtParams,
     rng: &mut fastrand::Rng,
 ) -> Result<(JointPath, RrtStats), (RrtError, RrtStats)> {
     let mut checks = 0;
     for attempt in 1..=CERTIFY_ATTEMPTS {
-        match plan_once(space, start, goal, &mut valid, params, rng) {
+        let certify = certify.as_mut().map(|c| &mut **c as EdgeCertifier<'_>);
+        match plan_once(space, start, goal, &mut valid, certify, params, rng) {
             Err((RrtError::Certification(_), st)) if attempt < CERTIFY_ATTEMPTS => {
                 checks += st.checks;
             }
@@ -535,6 +556,21 @@ pub fn plan(
     unreachable!("the last attempt returns")
 }
 
+/// Whether every edge of `path` passes its certification: `certify`, or a re-check at `fine`.
+fn certified(
+    space: &JointSpace,
+    path: &JointPath,
+    fine: f32,
+    valid: &mut impl FnMut(&[f32]) -> bool,
+    certify: &mut Option<EdgeCertifier<'_>>,
+    checks: &mut usize,
+) -> bool {
+    path.waypoints.windows(2).all(|w| match certify {
+        Some(c) => c(&w[0], &w[1], checks),
+        None => edge_valid(space, &w[0], &w[1], fine, valid, checks),
+    })
+}
+
 /// Searches with new trees after a path fails its certification, at most this many times.
 pub const CERTIFY_ATTEMPTS: usize = 3;
 
@@ -543,6 +579,7 @@ fn plan_once(
     start: &[f32],
     goal: &[f32],
     mut valid: impl FnMut(&[f32]) -> bool,
+    mut certify: Option<EdgeCertifier<'_>>,
     params: &RrtParams,
     rng: &mut fastrand::Rng,
 ) -> Result<(JointPath, RrtStats), (RrtError, RrtStats)> {
@@ -566,6 +603,10 @@ fn plan_once(
     if !space.within_limits(goal) || !valid(goal) {
         return Err((RrtError::InvalidGoal, stats));
     }
+    let fine = params.resolution / params.certify_factor.max(1) as f32;
+    let direct = JointPath {
+        waypoints: vec![start.to_vec(), goal.to_vec()],
+    };
     if edge_valid(
         space,
         start,
@@ -574,22 +615,17 @@ fn plan_once(
         &mut valid,
         &mut stats.checks,
     ) && (params.certify_factor <= 1
-        || edge_valid(
+        || certified(
             space,
-            start,
-            goal,
-            params.resolution / params.certify_factor as f32,
+            &direct,
+            fine,
             &mut valid,
+            &mut certify,
             &mut stats.checks,
         ))
     {
         stats.raw_waypoints = 2;
-        return Ok((
-            JointPath {
-                waypoints: vec![start.to_vec(), goal.to_vec()],
-            },
-            stats,
-        ));
+        return Ok((direct, stats));
     }
     let began = Instant::now();
     let mut a = Tree::new(space, start);
@@ -630,14 +666,12 @@ fn plan_once(
                 shortcut(space, &mut path, params, &mut valid, rng, &mut stats.checks);
                 if params.certify_factor > 1 {
                     // Every edge of the path was checked at the search resolution (tree
-                    // edges, shortcuts); now at the finer one, on the very configurations a
-                    // re-check at that resolution visits ([`JointPath::densify`]): the steps of
-                    // the coarse grid refined by the factor need not be those.
-                    let fine = params.resolution / params.certify_factor as f32;
+                    // edges, shortcuts); now certified: by `certify`, or at the finer
+                    // resolution, on the very configurations a re-check at it visits
+                    // ([`JointPath::densify`]): the steps of the coarse grid refined by the
+                    // factor need not be those.
                     let mut certify = |p: &JointPath, checks: &mut usize| {
-                        p.waypoints
-                            .windows(2)
-                            .all(|w| edge_valid(space, &w[0], &w[1], fine, &mut valid, checks))
+                        certified(space, p, fine, &mut valid, &mut certify, checks)
                     };
                     if !certify(&path, &mut stats.checks) {
                         // A shortcut cut a corner between the coarse checks: fall back to the

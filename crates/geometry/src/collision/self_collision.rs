@@ -11,6 +11,7 @@ use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
 use super::intersects;
+use super::motion::JointReach;
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -112,6 +113,9 @@ pub(super) struct ShapeEntry {
     pub(super) bounds: Option<(Pose, Cuboid)>,
     /// For a polyhedron of many vertices: its support by hill climbing (see [`ClimbingHull`]).
     climb: Option<Arc<ClimbingHull>>,
+    /// A ball that holds the shape: its centre in the shape's frame, its radius (tighter than
+    /// `radius` for a mesh piece, whose frame is its link's).
+    pub(super) ball: (Vector, f32),
 }
 
 impl ShapeEntry {
@@ -127,13 +131,15 @@ impl ShapeEntry {
             .as_convex_polyhedron()
             .filter(|hull| hull.points().len() > CLIMB_ABOVE)
             .map(|hull| Arc::new(ClimbingHull::new(hull)));
+        let sphere = shape.compute_local_bounding_sphere();
         ShapeEntry {
             link,
             local_pose,
-            shape,
             radius,
             bounds,
             climb,
+            ball: (sphere.center, sphere.radius.min(radius)),
+            shape,
         }
     }
 
@@ -161,7 +167,7 @@ impl ShapeEntry {
     }
 
     /// The shape's support function, where it has one: the climbing one for a large hull.
-    fn support(&self) -> Option<&dyn SupportMap> {
+    pub(super) fn support(&self) -> Option<&dyn SupportMap> {
         match &self.climb {
             Some(climb) => Some(&**climb),
             None => self.shape.as_support_map(),
@@ -238,6 +244,8 @@ pub struct SelfCollisionModel {
     pub(super) link_spheres: Vec<(Vector, f32)>,
     /// 0, 1, .. shapes.len() - 1.
     pub(super) all_shapes: Vec<u16>,
+    /// How fast each link's points may move with the joints (for motion checks).
+    pub(super) reach: JointReach,
     allowed: Vec<AllowedPair>,
 }
 
@@ -379,16 +387,18 @@ impl SelfCollisionModel {
                 if ids.is_empty() {
                     return (Vector::ZERO, -1.0);
                 }
+                let ball = |i: usize| {
+                    let e: &ShapeEntry = &shapes[i];
+                    (e.local_pose * e.ball.0, e.ball.1)
+                };
                 let centre = ids
                     .iter()
-                    .map(|&i| shapes[i].local_pose.translation)
+                    .map(|&i| ball(i).0)
                     .fold(Vector::ZERO, |sum, c| sum + c)
                     / ids.len() as f32;
                 let radius = ids
                     .iter()
-                    .map(|&i| {
-                        (shapes[i].local_pose.translation - centre).length() + shapes[i].radius
-                    })
+                    .map(|&i| (ball(i).0 - centre).length() + ball(i).1)
                     .fold(0.0f32, f32::max);
                 (centre, radius)
             })
@@ -406,6 +416,7 @@ impl SelfCollisionModel {
             }
         }
         SelfCollisionModel {
+            reach: JointReach::new(&model),
             model,
             all_shapes: (0..shapes.len() as u16).collect(),
             shapes,

@@ -1,0 +1,497 @@
+//! Certifying a straight joint-space motion free of collisions by conservative advancement
+//! (Schwarzer, Saha and Latombe, "Exact collision checking of robot paths", 2002): two bodies
+//! at distance `d` stay apart while their relative motion is under `d`, and that motion is
+//! bounded by each joint's step times the bodies' greatest distance from its axis. Each pair of
+//! bodies is re-measured on its own schedule: a far pair once a motion, a near one as it comes
+//! closer. A pair nearer than `floor` is re-measured every `floor` of relative motion, so a
+//! contact between two measurements is at most `floor / 2` deep; elsewhere the motion is free
+//! everywhere, not only at sampled configurations.
+
+use parry3d::bounding_volume::{Aabb, BoundingVolume};
+use parry3d::math::{Pose, Vector};
+use parry3d::query;
+use parry3d::query::details::distance_support_map_support_map;
+use parry3d::shape::Shape;
+
+use super::self_collision::{PairGroup, ShapeEntry};
+use super::{CollisionChecker, Contact, HeldObject, Hit, SCRATCH, Scratch, intersects};
+use crate::agent::{AgentModel, JointKind};
+
+/// A movable joint above a link, with a bound (over all configurations) on the distance from
+/// its axis to the link frame's origin; and where only fixed joints lie between them, the
+/// link's frame in the joint's child frame and the axis, for the exact distance from the axis.
+#[derive(Clone, Copy, Debug)]
+struct Above {
+    joint: u16,
+    arm: f32,
+    prismatic: bool,
+    rigid: Option<(Pose, Vector)>,
+}
+
+/// A body of a link for speed bounds: the link, and a ball that holds the body (centre in the
+/// link's frame, radius).
+type Body = (usize, Vector, f32);
+
+/// Per link of a model, the movable joints above it, root first: what bounds how fast a
+/// link's points move when the joints do.
+#[derive(Clone, Debug, Default)]
+pub(super) struct JointReach {
+    above: Vec<Vec<Above>>,
+}
+
+impl JointReach {
+    pub(super) fn new(model: &AgentModel) -> JointReach {
+        let mut above: Vec<Vec<Above>> = vec![Vec::new(); model.links().len()];
+        // Joints come parent first (a joint's child link is its index + 1).
+        for (j, joint) in model.joints().iter().enumerate() {
+            let slide = match joint.kind {
+                JointKind::Prismatic => joint.limits.lower.abs().max(joint.limits.upper.abs()),
+                _ => 0.0,
+            };
+            let step = joint.origin.translation.length() + slide;
+            let fixed = !joint.is_movable();
+            let mut list: Vec<Above> = above[joint.parent]
+                .iter()
+                .map(|a| Above {
+                    arm: a.arm + step,
+                    rigid: a
+                        .rigid
+                        .filter(|_| fixed)
+                        .map(|(t, axis)| (t * joint.origin, axis)),
+                    ..*a
+                })
+                .collect();
+            if joint.is_movable() {
+                list.push(Above {
+                    joint: j as u16,
+                    arm: 0.0,
+                    prismatic: joint.kind == JointKind::Prismatic,
+                    rigid: Some((Pose::IDENTITY, joint.axis)),
+                });
+            }
+            above[joint.child] = list;
+        }
+        JointReach { above }
+    }
+
+    /// A bound on the speed (metres per unit of the motion's parameter) of the points of
+    /// `body` relative to those of `other` (the world without it), when joint `j` moves at
+    /// `speed[j]` (absolute values). The joints above both bodies move them together and do
+    /// not count.
+    fn rate(&self, speed: &[f32], body: Body, other: Option<Body>) -> f32 {
+        let a = &self.above[body.0];
+        let b = other.map_or(&[][..], |o| &self.above[o.0][..]);
+        let common = a
+            .iter()
+            .zip(b)
+            .take_while(|(x, y)| x.joint == y.joint)
+            .count();
+        let side = |list: &[Above], (_, centre, radius): Body| -> f32 {
+            list.iter()
+                .map(|e| {
+                    let s = speed[e.joint as usize];
+                    if e.prismatic || s == 0.0 {
+                        return s;
+                    }
+                    let from_axis = match e.rigid {
+                        Some((frame, axis)) => {
+                            let c = frame * centre;
+                            (c - axis * c.dot(axis)).length()
+                        }
+                        None => e.arm + centre.length(),
+                    };
+                    s * (from_axis + radius)
+                })
+                .sum()
+        };
+        let rest = other.map_or(0.0, |o| side(&b[common..], o));
+        side(&a[common..], body) + rest
+    }
+}
+
+/// Two bodies whose distance is followed along a motion.
+#[derive(Clone, Copy, Debug)]
+enum Pair {
+    /// Agent shape and obstacle.
+    Obstacle(u16, u32),
+    /// A pair of links (an index into the checked groups), until it is near: then its shapes.
+    Links(u32),
+    /// Two agent shapes.
+    Shapes(u16, u16),
+    /// Held object and obstacle.
+    HeldObstacle(u8, u32),
+    /// Held object and a link, until they are near: then the link's shapes.
+    HeldLink(u8, u16),
+    /// Held object and agent shape.
+    HeldShape(u8, u16),
+    /// Two held objects.
+    HeldObjects(u8, u8),
+}
+
+/// A pair, its relative speed bound, and when it must be measured next.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    pair: Pair,
+    rate: f32,
+    next: f32,
+}
+
+/// What a measurement of a pair found.
+enum Measure {
+    /// Apart by at least this much.
+    Apart(f32),
+    /// Near: measure the shapes of the links instead.
+    Split,
+    /// In collision.
+    Hit(Hit),
+}
+
+/// GJK stops within this fraction of the distance (parry's relative tolerance, with margin).
+const GJK_RELATIVE: f32 = 0.005;
+
+/// A pair due within this much of the motion's parameter is measured with the pairs due now.
+const BATCH: f32 = 0.02;
+
+/// A cheap bound (boxes, spheres) of at least this (metres) is used as it is; nearer, the
+/// exact distance is measured.
+const CHEAP_ENOUGH: f32 = 0.02;
+
+/// A link nearer than this (metres, by bounding spheres) is measured shape by shape.
+const SPLIT: f32 = 0.03;
+
+/// What a motion check found, and how many configurations it posed.
+#[derive(Debug, Clone)]
+pub struct MotionCheck {
+    /// The first collision found, if any.
+    pub contact: Option<Contact>,
+    /// Configurations posed (the start's full check included).
+    pub configurations: usize,
+}
+
+impl CollisionChecker {
+    /// Whether the straight joint-space motion from `a` to `b` (full configurations; each
+    /// joint value moves linearly, so a continuous joint's `b` is `a`'s value plus its step,
+    /// not wrapped) is free, by conservative advancement (see the module docs): free at every
+    /// configuration of the motion where no pair comes within `floor` metres, and a pair
+    /// within `floor` is measured every `floor` of its relative motion. `a` is checked in
+    /// full first.
+    ///
+    /// # Panics
+    /// If `a` or `b` does not have the model's number of degrees of freedom.
+    pub fn check_motion(&self, a: &[f32], b: &[f32], floor: f32) -> MotionCheck {
+        if let Some(c) = self.first_collision(a) {
+            return MotionCheck {
+                contact: Some(c),
+                configurations: 1,
+            };
+        }
+        let model = &self.agent.model;
+        assert_eq!(b.len(), model.dof(), "configuration length");
+        let speed: Vec<f32> = (0..model.joints().len())
+            .map(|j| (model.joint_value(j, b) - model.joint_value(j, a)).abs())
+            .collect();
+        let floor = floor.max(1e-6);
+        SCRATCH.with(|scratch| {
+            let mut s = scratch.borrow_mut();
+            let (mut moving, mut groups, fixed) = self.pose_into(a, &mut s);
+            if fixed.is_some_and(|f| !f.matches(b)) {
+                // Joints outside the cache's move too: every shape and pair may.
+                (moving, groups) = (&self.agent.all_shapes, &self.agent.groups);
+            }
+            let mut items = self.motion_items(&speed, moving, groups, &mut s);
+            let mut q = a.to_vec();
+            let (mut t, mut configurations) = (0.0f32, 1);
+            loop {
+                let mut k = 0;
+                while k < items.len() {
+                    let item = items[k];
+                    k += 1;
+                    // Due within the window: measured now, early (which is sound), so that
+                    // pairs share the configurations posed.
+                    if item.next > t + BATCH {
+                        continue;
+                    }
+                    let remaining = item.rate * (1.0 - t);
+                    let next = match self.measure(item.pair, remaining, groups, &s) {
+                        Measure::Hit(h) => {
+                            return MotionCheck {
+                                contact: Some(self.contact(h)),
+                                configurations,
+                            };
+                        }
+                        Measure::Split => {
+                            self.split(&speed, item.pair, groups, t, &mut items);
+                            f32::INFINITY
+                        }
+                        Measure::Apart(d) => t + d.max(floor) / item.rate,
+                    };
+                    items[k - 1].next = if next > 1.0 { f32::INFINITY } else { next };
+                }
+                t = items.iter().map(|i| i.next).fold(f32::INFINITY, f32::min);
+                if t > 1.0 {
+                    return MotionCheck {
+                        contact: None,
+                        configurations,
+                    };
+                }
+                for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(b)) {
+                    *v = x + t * (y - x);
+                }
+                self.pose_into(&q, &mut s);
+                configurations += 1;
+            }
+        })
+    }
+
+    /// Every pair that may come together during the motion (posed at its start in `s`), due
+    /// at once: the moving shapes against the obstacles within their reach, the checked
+    /// pairs of links of which one moves, the held objects against the obstacles, the agent
+    /// and each other.
+    fn motion_items(
+        &self,
+        speed: &[f32],
+        moving: &[u16],
+        groups: &[PairGroup],
+        s: &mut Scratch,
+    ) -> Vec<Item> {
+        let reach = &self.agent.reach;
+        let shapes = &self.agent.shapes;
+        let mut items = Vec::new();
+        let mut push = |pair, rate: f32| {
+            if rate > 0.0 {
+                items.push(Item {
+                    pair,
+                    rate,
+                    next: 0.0,
+                });
+            }
+        };
+        if !self.obstacles.is_empty() {
+            for &i in moving {
+                let e = &shapes[i as usize];
+                let rate = reach.rate(speed, body(e), None);
+                let swept = s.aabbs[i as usize].loosened(rate);
+                self.obstacles.candidates(&swept, &mut s.candidates);
+                for &o in &s.candidates {
+                    push(Pair::Obstacle(i, o), rate);
+                }
+            }
+        }
+        if self.self_collision {
+            let spheres = &self.agent.link_spheres;
+            for (g, pg) in groups.iter().enumerate() {
+                let (a, b) = (pg.a as usize, pg.b as usize);
+                let (ba, bb) = (
+                    (a, spheres[a].0, spheres[a].1),
+                    (b, spheres[b].0, spheres[b].1),
+                );
+                push(Pair::Links(g as u32), reach.rate(speed, ba, Some(bb)));
+            }
+        }
+        let held: Vec<&HeldObject> = self.held.iter().chain(&self.other_held).collect();
+        for (k, h) in held.iter().enumerate() {
+            let hk = held_body(h);
+            let rate = reach.rate(speed, hk, None);
+            let p = s.links[h.link] * h.grasp;
+            let swept = h.shape.compute_aabb(&p).loosened(rate);
+            self.obstacles.candidates(&swept, &mut s.candidates);
+            for &o in &s.candidates {
+                push(Pair::HeldObstacle(k as u8, o), rate);
+            }
+            let spheres = &self.agent.link_spheres;
+            for (l, (centre, radius)) in spheres.iter().enumerate() {
+                if *radius >= 0.0 && !h.touching[l] {
+                    let rate = reach.rate(speed, hk, Some((l, *centre, *radius)));
+                    push(Pair::HeldLink(k as u8, l as u16), rate);
+                }
+            }
+            for (l, other) in held.iter().enumerate().skip(k + 1) {
+                push(
+                    Pair::HeldObjects(k as u8, l as u8),
+                    reach.rate(speed, hk, Some(held_body(other))),
+                );
+            }
+        }
+        items
+    }
+
+    /// Replaces a near pair of links, or a held object near a link, by its pairs of shapes,
+    /// due at `t`.
+    fn split(&self, speed: &[f32], pair: Pair, groups: &[PairGroup], t: f32, out: &mut Vec<Item>) {
+        let (shapes, reach) = (&self.agent.shapes, &self.agent.reach);
+        let mut push = |pair, rate: f32| {
+            if rate > 0.0 {
+                out.push(Item {
+                    pair,
+                    rate,
+                    next: t,
+                });
+            }
+        };
+        match pair {
+            Pair::Links(g) => {
+                let g = groups[g as usize];
+                for &(a, b) in &self.agent.pairs[g.start as usize..g.end as usize] {
+                    let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
+                    let rate = reach.rate(speed, body(ea), Some(body(eb)));
+                    push(Pair::Shapes(a, b), rate);
+                }
+            }
+            Pair::HeldLink(k, l) => {
+                let hk = held_body(self.held_k(k));
+                for (i, e) in shapes.iter().enumerate() {
+                    if e.link == l as usize {
+                        let rate = reach.rate(speed, hk, Some(body(e)));
+                        push(Pair::HeldShape(k, i as u16), rate);
+                    }
+                }
+            }
+            _ => unreachable!("only links split"),
+        }
+    }
+
+    /// Held object `k` (0: [`CollisionChecker::set_held_object`]'s, then the others).
+    fn held_k(&self, k: u8) -> &HeldObject {
+        let mut all = self.held.iter().chain(&self.other_held);
+        all.nth(k as usize).expect("a held object's index")
+    }
+
+    /// A lower bound on the distance of `pair` as posed in `s`: a cheap bound where it
+    /// exceeds `remaining` (how far the pair may still move), else the exact distance, and a
+    /// collision where that is 0 and the exact test agrees.
+    fn measure(&self, pair: Pair, remaining: f32, groups: &[PairGroup], s: &Scratch) -> Measure {
+        let shapes = &self.agent.shapes;
+        let obstacle = |o: u32| &self.obstacles.obstacles[o as usize];
+        let held = |k: u8| {
+            let h = self.held_k(k);
+            (h, s.links[h.link] * h.grasp)
+        };
+        let apart_or = |cheap: f32, exact: &dyn Fn() -> f32, hit: &dyn Fn() -> bool, h: Hit| {
+            // A cheap bound that settles the rest of the motion, or is worth a few steps.
+            if cheap >= remaining.min(CHEAP_ENOUGH) {
+                return Measure::Apart(cheap);
+            }
+            let d = exact();
+            if d > 0.0 {
+                Measure::Apart((d * (1.0 - GJK_RELATIVE)).max(cheap).max(0.0))
+            } else if hit() {
+                Measure::Hit(h)
+            } else {
+                Measure::Apart(cheap.max(0.0))
+            }
+        };
+        match pair {
+            Pair::Obstacle(i, o) => {
+                let (e, p, ob) = (&shapes[i as usize], &s.poses[i as usize], obstacle(o));
+                let cheap = aabb_gap(&s.aabbs[i as usize], &self.obstacles.aabbs[o as usize]);
+                apart_or(
+                    cheap,
+                    &|| entry_distance(e, p, &*ob.shape.0, &ob.pose),
+                    &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
+                    Hit::Obstacle(i as usize, o as usize),
+                )
+            }
+            Pair::Links(g) => {
+                let g = groups[g as usize];
+                let (a, b) = (g.a as usize, g.b as usize);
+                let r = self.agent.link_spheres[a].1 + self.agent.link_spheres[b].1;
+                let gap = (s.centres[a] - s.centres[b]).length() - r;
+                if gap >= remaining.min(SPLIT) {
+                    Measure::Apart(gap)
+                } else {
+                    Measure::Split
+                }
+            }
+            Pair::HeldLink(k, l) => {
+                let (h, p) = held(k);
+                let (l, sphere) = (l as usize, self.agent.link_spheres[l as usize]);
+                let gap = (s.centres[l] - p.translation).length() - sphere.1 - h.radius;
+                if gap >= remaining.min(SPLIT) {
+                    Measure::Apart(gap)
+                } else {
+                    Measure::Split
+                }
+            }
+            Pair::Shapes(a, b) => {
+                let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
+                let (pa, pb) = (&s.poses[a as usize], &s.poses[b as usize]);
+                let ((ca, ra), (cb, rb)) = (ball(ea, pa), ball(eb, pb));
+                let sphere = (ca - cb).length() - ra - rb;
+                let cheap = sphere.max(aabb_gap(&s.aabbs[a as usize], &s.aabbs[b as usize]));
+                apart_or(
+                    cheap,
+                    &|| entry_distance(ea, pa, &*eb.shape.0, pb),
+                    &|| ea.hits_shape_by_gjk(pa, eb, pb),
+                    Hit::SelfPair(a as usize, b as usize),
+                )
+            }
+            Pair::HeldObstacle(k, o) => {
+                let ((h, p), ob) = (held(k), obstacle(o));
+                let cheap = aabb_gap(&h.shape.compute_aabb(&p), &self.obstacles.aabbs[o as usize]);
+                apart_or(
+                    cheap,
+                    &|| distance(&p, &*h.shape.0, &ob.pose, &*ob.shape.0),
+                    &|| intersects(&p, &*h.shape.0, &ob.pose, &*ob.shape.0),
+                    Hit::HeldObstacle(k as usize, o as usize),
+                )
+            }
+            Pair::HeldShape(k, i) => {
+                let ((h, p), e) = (held(k), &shapes[i as usize]);
+                let pe = &s.poses[i as usize];
+                let (ce, re) = ball(e, pe);
+                let cheap = (ce - p.translation).length() - re - h.radius;
+                apart_or(
+                    cheap,
+                    &|| entry_distance(e, pe, &*h.shape.0, &p),
+                    &|| e.hits(pe, &*h.shape.0, &p),
+                    Hit::HeldShape(k as usize, i as usize),
+                )
+            }
+            Pair::HeldObjects(k, l) => {
+                let ((a, pa), (b, pb)) = (held(k), held(l));
+                let cheap = (pa.translation - pb.translation).length() - a.radius - b.radius;
+                apart_or(
+                    cheap,
+                    &|| distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
+                    &|| intersects(&pa, &*a.shape.0, &pb, &*b.shape.0),
+                    Hit::HeldPair(k as usize, l as usize),
+                )
+            }
+        }
+    }
+}
+
+/// An agent shape as a body of its link.
+fn body(e: &ShapeEntry) -> Body {
+    (e.link, e.local_pose * e.ball.0, e.ball.1)
+}
+
+/// The world centre of an agent shape's ball at `pose`, and its radius.
+fn ball(e: &ShapeEntry, pose: &Pose) -> (Vector, f32) {
+    (*pose * e.ball.0, e.ball.1)
+}
+
+/// A held object as a body of the link holding it.
+fn held_body(h: &HeldObject) -> Body {
+    (h.link, h.grasp.translation, h.radius)
+}
+
+/// The distance between two AABBs (0 where they overlap): a lower bound on their contents'.
+fn aabb_gap(a: &Aabb, b: &Aabb) -> f32 {
+    let gap = (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO);
+    gap.length()
+}
+
+/// The distance between an agent shape and another shape, by GJK with the climbing support
+/// of a large hull; 0 where parry cannot tell.
+fn entry_distance(e: &ShapeEntry, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> f32 {
+    match (e.support(), other.as_support_map()) {
+        (Some(a), Some(b)) => distance_support_map_support_map(&pose.inv_mul(other_pose), a, b),
+        _ => distance(pose, &*e.shape.0, other_pose, other),
+    }
+}
+
+/// parry's distance of two shapes; 0 where it cannot tell.
+fn distance(pa: &Pose, a: &dyn Shape, pb: &Pose, b: &dyn Shape) -> f32 {
+    query::distance(pa, a, pb, b).map_or(0.0, |d| d.distance)
+}
