@@ -175,3 +175,91 @@ fn report_fill_ratios() {
         }
     }
 }
+
+/// A motion check by conservative advancement on the real PR2 (convex pieces with climbing
+/// supports, bounding boxes and balls) agrees with 2,000 evenly spaced configurations: a
+/// motion of the right arm on which they find a collision is reported, one on which they
+/// find none is free.
+#[test]
+#[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
+fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
+    use geometry::collision::{
+        CollisionChecker, Obstacle, SelfCollisionModel, SelfCollisionOptions, StaticObstacles,
+    };
+    use parry3d::math::{Pose, Vector};
+    use parry3d::shape::SharedShape;
+    use std::sync::Arc;
+
+    let decompose = ["r_upper_arm_link", "r_forearm_link", "torso_lift_link"];
+    let modes: Vec<(&str, ConvexMode)> = decompose
+        .iter()
+        .map(|l| (*l, ConvexMode::Decompose))
+        .collect();
+    let model = Arc::new(load("pr2_description/urdf/robot.xml", &modes));
+    let options = SelfCollisionOptions::default();
+    let self_model = Arc::new(SelfCollisionModel::new(model.clone(), &options));
+    let boxed = |name: &str, c: Vector, h: Vector| Obstacle {
+        name: name.into(),
+        pose: Pose::from_translation(c),
+        shape: SharedShape::cuboid(h.x, h.y, h.z),
+    };
+    let obstacles = Arc::new(StaticObstacles::new(vec![
+        boxed(
+            "table",
+            Vector::new(0.95, -0.4, 0.3),
+            Vector::new(0.4, 0.25, 0.3),
+        ),
+        boxed(
+            "slab",
+            Vector::new(0.8, -0.45, 0.9),
+            Vector::new(0.3, 0.001, 0.3),
+        ),
+    ]));
+    let mut checker = CollisionChecker::new(self_model, obstacles, Pose::IDENTITY);
+    let arm: Vec<usize> = [
+        "r_shoulder_pan_joint",
+        "r_shoulder_lift_joint",
+        "r_upper_arm_roll_joint",
+        "r_elbow_flex_joint",
+        "r_forearm_roll_joint",
+        "r_wrist_flex_joint",
+        "r_wrist_roll_joint",
+    ]
+    .iter()
+    .map(|j| model.dof_index(j).unwrap())
+    .collect();
+    let template = model.default_configuration().into_vec();
+    checker.set_fixed_joints(&template, &arm);
+    let mut rng = fastrand::Rng::with_seed(3);
+    let (mut hit, mut free) = (0, 0);
+    let (mut q, mut a) = (template.clone(), template.clone());
+    for k in 0..120 {
+        let r = model.random_configuration(&mut rng).into_vec();
+        let mut b = template.clone();
+        for &d in &arm {
+            a[d] = r[d];
+            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
+        }
+        if !checker.is_config_free(&a) {
+            continue;
+        }
+        let sampled = (1..=2000).any(|s| {
+            let t = s as f32 / 2000.0;
+            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(&b)) {
+                *v = x + t * (y - x);
+            }
+            !checker.is_config_free(&q)
+        });
+        let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
+        assert_eq!(
+            found, sampled,
+            "motion {k}: dense sampling finds a collision: {sampled}"
+        );
+        if sampled {
+            hit += 1;
+        } else {
+            free += 1;
+        }
+    }
+    assert!(hit > 5 && free > 5, "{hit} colliding, {free} free");
+}

@@ -21,6 +21,8 @@
 use std::sync::{Arc, Mutex, Weak};
 use std::time::{Duration, Instant};
 
+use geometry::agent::AgentModel;
+use geometry::collision::{SelfCollisionModel, SelfCollisionOptions};
 use geometry::scene::{AgentId, AgentKind, ObjectId};
 use geometry::world::{World, WorldModel};
 use parry3d::math::Vector;
@@ -293,6 +295,9 @@ type SetupEntry = (Weak<WorldModel>, AgentId, Arc<RobotSetup>);
 pub struct Planner {
     config: PlannerConfig,
     setups: Mutex<Vec<SetupEntry>>,
+    /// Self-collision models per agent model (while alive): scenes that differ only in their
+    /// objects (a randomized benchmark's) share their robot's, which is costly to make.
+    self_models: Mutex<Vec<(Weak<AgentModel>, Arc<SelfCollisionModel>)>>,
 }
 
 impl Planner {
@@ -306,6 +311,7 @@ impl Planner {
         Planner {
             config,
             setups: Mutex::default(),
+            self_models: Mutex::default(),
         }
     }
 
@@ -334,9 +340,27 @@ impl Planner {
         {
             return Ok(s.clone());
         }
-        let setup = Arc::new(RobotSetup::for_agent(world, agent).map_err(GtpError::Setup)?);
+        let self_model = self.self_model(&world.agent(agent).model);
+        let setup = RobotSetup::with_self_model(world, agent, self_model);
+        let setup = Arc::new(setup.map_err(GtpError::Setup)?);
         setups.push((Arc::downgrade(world.model()), agent, setup.clone()));
         Ok(setup)
+    }
+
+    /// The self-collision model of agent model `model`: made on first use, then shared.
+    fn self_model(&self, model: &Arc<AgentModel>) -> Arc<SelfCollisionModel> {
+        let mut models = self.self_models.lock().unwrap_or_else(|e| e.into_inner());
+        models.retain(|(m, _)| m.strong_count() > 0);
+        if let Some((_, s)) = models
+            .iter()
+            .find(|(m, _)| std::ptr::eq(m.as_ptr(), Arc::as_ptr(model)))
+        {
+            return s.clone();
+        }
+        let options = SelfCollisionOptions::default();
+        let made = Arc::new(SelfCollisionModel::new(model.clone(), &options));
+        models.push((Arc::downgrade(model), made.clone()));
+        made
     }
 
     /// Runs task `name` with arguments `args` (object and agent names) on `world`. The search

@@ -120,9 +120,20 @@ impl RobotSetup {
     pub fn for_agent(world: &World, agent: AgentId) -> Result<RobotSetup, String> {
         let model = world.agent(agent).model.clone();
         let self_model = Arc::new(SelfCollisionModel::new(
-            model.clone(),
+            model,
             &SelfCollisionOptions::default(),
         ));
+        RobotSetup::with_self_model(world, agent, self_model)
+    }
+
+    /// [`RobotSetup::for_agent`] with the agent model's self-collision model made already
+    /// (what a planner keeps between scenes that share the model).
+    pub fn with_self_model(
+        world: &World,
+        agent: AgentId,
+        self_model: Arc<SelfCollisionModel>,
+    ) -> Result<RobotSetup, String> {
+        let model = world.agent(agent).model.clone();
         let mut arms = Vec::new();
         for name in model.arm_names() {
             let Ok(chain) = model.chain(&name) else {

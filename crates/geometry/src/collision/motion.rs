@@ -11,7 +11,7 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::query::details::distance_support_map_support_map;
-use parry3d::shape::Shape;
+use parry3d::shape::{Shape, SupportMap};
 
 use super::self_collision::{PairGroup, ShapeEntry};
 use super::{CollisionChecker, Contact, HeldObject, Hit, SCRATCH, Scratch, intersects};
@@ -383,7 +383,10 @@ impl CollisionChecker {
         match pair {
             Pair::Obstacle(i, o) => {
                 let (e, p, ob) = (&shapes[i as usize], &s.poses[i as usize], obstacle(o));
-                let cheap = aabb_gap(&s.aabbs[i as usize], &self.obstacles.aabbs[o as usize]);
+                let mut cheap = aabb_gap(&s.aabbs[i as usize], &self.obstacles.aabbs[o as usize]);
+                if cheap < remaining.min(CHEAP_ENOUGH) {
+                    cheap = cheap.max(box_gap(e, p, None, &*ob.shape.0, &ob.pose));
+                }
                 apart_or(
                     cheap,
                     &|| entry_distance(e, p, &*ob.shape.0, &ob.pose),
@@ -417,7 +420,10 @@ impl CollisionChecker {
                 let (pa, pb) = (&s.poses[a as usize], &s.poses[b as usize]);
                 let ((ca, ra), (cb, rb)) = (ball(ea, pa), ball(eb, pb));
                 let sphere = (ca - cb).length() - ra - rb;
-                let cheap = sphere.max(aabb_gap(&s.aabbs[a as usize], &s.aabbs[b as usize]));
+                let mut cheap = sphere.max(aabb_gap(&s.aabbs[a as usize], &s.aabbs[b as usize]));
+                if cheap < remaining.min(CHEAP_ENOUGH) {
+                    cheap = cheap.max(box_gap(ea, pa, Some(eb), &*eb.shape.0, pb));
+                }
                 apart_or(
                     cheap,
                     &|| entry_distance(ea, pa, &*eb.shape.0, pb),
@@ -489,6 +495,34 @@ fn entry_distance(e: &ShapeEntry, pose: &Pose, other: &dyn Shape, other_pose: &P
         (Some(a), Some(b)) => distance_support_map_support_map(&pose.inv_mul(other_pose), a, b),
         _ => distance(pose, &*e.shape.0, other_pose, other),
     }
+}
+
+/// A lower bound on the distance of an agent shape at `pose` and another shape (an agent
+/// shape `other_entry`, or `other`) at `other_pose`, from the bounding boxes of the polyhedra
+/// among them (cheap supports); 0 where neither has one.
+fn box_gap(
+    e: &ShapeEntry,
+    pose: &Pose,
+    other_entry: Option<&ShapeEntry>,
+    other: &dyn Shape,
+    other_pose: &Pose,
+) -> f32 {
+    let other_box = other_entry.and_then(|o| o.bounds.as_ref());
+    if e.bounds.is_none() && other_box.is_none() {
+        return 0.0;
+    }
+    let (pa, a): (Pose, &dyn SupportMap) = match (&e.bounds, e.support()) {
+        (Some((at, cuboid)), _) => (*pose * *at, cuboid),
+        (None, Some(sm)) => (*pose, sm),
+        (None, None) => return 0.0,
+    };
+    let (pb, b): (Pose, &dyn SupportMap) = match (other_box, other.as_support_map()) {
+        (Some((at, cuboid)), _) => (*other_pose * *at, cuboid),
+        (None, Some(sm)) => (*other_pose, sm),
+        (None, None) => return 0.0,
+    };
+    let d = distance_support_map_support_map(&pa.inv_mul(&pb), a, b);
+    (d * (1.0 - GJK_RELATIVE)).max(0.0)
 }
 
 /// parry's distance of two shapes; 0 where it cannot tell.
