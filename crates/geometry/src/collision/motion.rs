@@ -10,7 +10,7 @@
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::query::details::distance_support_map_support_map;
+use parry3d::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d::shape::{Shape, SupportMap};
 
 use super::self_collision::{PairGroup, ShapeEntry};
@@ -134,6 +134,8 @@ struct Item {
     pair: Pair,
     rate: f32,
     next: f32,
+    /// The direction that last separated the pair (zero: none yet), where GJK starts next.
+    warm: Vector,
 }
 
 /// What a measurement of a pair found.
@@ -212,7 +214,10 @@ impl CollisionChecker {
                         continue;
                     }
                     let remaining = item.rate * (1.0 - t);
-                    let next = match self.measure(item.pair, remaining, groups, &s) {
+                    let mut warm = item.warm;
+                    let measured = self.measure(item.pair, remaining, groups, &s, &mut warm);
+                    items[k - 1].warm = warm;
+                    let next = match measured {
                         Measure::Hit(h) => {
                             return MotionCheck {
                                 contact: Some(self.contact(h)),
@@ -263,6 +268,7 @@ impl CollisionChecker {
                     pair,
                     rate,
                     next: 0.0,
+                    warm: Vector::ZERO,
                 });
             }
         };
@@ -325,6 +331,7 @@ impl CollisionChecker {
                     pair,
                     rate,
                     next: t,
+                    warm: Vector::ZERO,
                 });
             }
         };
@@ -359,28 +366,39 @@ impl CollisionChecker {
     /// A lower bound on the distance of `pair` as posed in `s`: a cheap bound where it
     /// exceeds `remaining` (how far the pair may still move), else the exact distance, and a
     /// collision where that is 0 and the exact test agrees.
-    fn measure(&self, pair: Pair, remaining: f32, groups: &[PairGroup], s: &Scratch) -> Measure {
+    fn measure(
+        &self,
+        pair: Pair,
+        remaining: f32,
+        groups: &[PairGroup],
+        s: &Scratch,
+        warm_out: &mut Vector,
+    ) -> Measure {
         let shapes = &self.agent.shapes;
         let obstacle = |o: u32| &self.obstacles.obstacles[o as usize];
         let held = |k: u8| {
             let h = self.held_k(k);
             (h, s.links[h.link] * h.grasp)
         };
-        let apart_or = |cheap: f32, exact: &dyn Fn() -> f32, hit: &dyn Fn() -> bool, h: Hit| {
-            // A cheap bound that settles the rest of the motion, or is worth a few steps.
-            if cheap >= remaining.min(CHEAP_ENOUGH) {
-                return Measure::Apart(cheap);
-            }
-            let d = exact();
-            if d > 0.0 {
-                Measure::Apart((d * (1.0 - GJK_RELATIVE)).max(cheap).max(0.0))
-            } else if hit() {
-                Measure::Hit(h)
-            } else {
-                Measure::Apart(cheap.max(0.0))
-            }
-        };
-        match pair {
+        let warm = std::cell::Cell::new(*warm_out);
+        let apart_or =
+            |cheap: f32, exact: &dyn Fn(&mut Vector) -> f32, hit: &dyn Fn() -> bool, h: Hit| {
+                // A cheap bound that settles the rest of the motion, or is worth a few steps.
+                if cheap >= remaining.min(CHEAP_ENOUGH) {
+                    return Measure::Apart(cheap);
+                }
+                let mut dir = warm.get();
+                let d = exact(&mut dir);
+                warm.set(dir);
+                if d > 0.0 {
+                    Measure::Apart(d.max(cheap))
+                } else if hit() {
+                    Measure::Hit(h)
+                } else {
+                    Measure::Apart(cheap.max(0.0))
+                }
+            };
+        let out = match pair {
             Pair::Obstacle(i, o) => {
                 let (e, p, ob) = (&shapes[i as usize], &s.poses[i as usize], obstacle(o));
                 let mut cheap = aabb_gap(&s.aabbs[i as usize], &self.obstacles.aabbs[o as usize]);
@@ -389,7 +407,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|| entry_distance(e, p, &*ob.shape.0, &ob.pose),
+                    &|w| entry_gap(e, p, &*ob.shape.0, &ob.pose, w),
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
                 )
@@ -426,7 +444,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|| entry_distance(ea, pa, &*eb.shape.0, pb),
+                    &|w| entry_gap(ea, pa, &*eb.shape.0, pb, w),
                     &|| ea.hits_shape_by_gjk(pa, eb, pb),
                     Hit::SelfPair(a as usize, b as usize),
                 )
@@ -436,7 +454,7 @@ impl CollisionChecker {
                 let cheap = aabb_gap(&h.shape.compute_aabb(&p), &self.obstacles.aabbs[o as usize]);
                 apart_or(
                     cheap,
-                    &|| distance(&p, &*h.shape.0, &ob.pose, &*ob.shape.0),
+                    &|_| gap(&p, &*h.shape.0, &ob.pose, &*ob.shape.0),
                     &|| intersects(&p, &*h.shape.0, &ob.pose, &*ob.shape.0),
                     Hit::HeldObstacle(k as usize, o as usize),
                 )
@@ -448,7 +466,7 @@ impl CollisionChecker {
                 let cheap = (ce - p.translation).length() - re - h.radius;
                 apart_or(
                     cheap,
-                    &|| entry_distance(e, pe, &*h.shape.0, &p),
+                    &|w| entry_gap(e, pe, &*h.shape.0, &p, w),
                     &|| e.hits(pe, &*h.shape.0, &p),
                     Hit::HeldShape(k as usize, i as usize),
                 )
@@ -458,12 +476,14 @@ impl CollisionChecker {
                 let cheap = (pa.translation - pb.translation).length() - a.radius - b.radius;
                 apart_or(
                     cheap,
-                    &|| distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
+                    &|_| gap(&pa, &*a.shape.0, &pb, &*b.shape.0),
                     &|| intersects(&pa, &*a.shape.0, &pb, &*b.shape.0),
                     Hit::HeldPair(k as usize, l as usize),
                 )
             }
-        }
+        };
+        *warm_out = warm.get();
+        out
     }
 }
 
@@ -488,12 +508,75 @@ fn aabb_gap(a: &Aabb, b: &Aabb) -> f32 {
     gap.length()
 }
 
-/// The distance between an agent shape and another shape, by GJK with the climbing support
-/// of a large hull; 0 where parry cannot tell.
-fn entry_distance(e: &ShapeEntry, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> f32 {
+/// A lower bound on the distance between an agent shape at `pose` and another shape at
+/// `other_pose` (see [`gap`]), by GJK with the climbing support of a large hull, started from
+/// `warm` (the direction that last separated the pair; updated).
+fn entry_gap(
+    e: &ShapeEntry,
+    pose: &Pose,
+    other: &dyn Shape,
+    other_pose: &Pose,
+    warm: &mut Vector,
+) -> f32 {
     match (e.support(), other.as_support_map()) {
-        (Some(a), Some(b)) => distance_support_map_support_map(&pose.inv_mul(other_pose), a, b),
-        _ => distance(pose, &*e.shape.0, other_pose, other),
+        (Some(a), Some(b)) => support_gap(&pose.inv_mul(other_pose), a, b, warm),
+        _ => gap(pose, &*e.shape.0, other_pose, other),
+    }
+}
+
+/// A proven lower bound on the distance between support maps `a` and `b` (`b` at `pos12` in
+/// `a`'s frame): GJK's separating direction, started from `warm` where it is one, and the gap
+/// along it between the shapes' support points; 0 where they are not proven apart. A proof
+/// whatever GJK's answer is worth (its witnesses may call touching shapes apart).
+fn support_gap(pos12: &Pose, a: &dyn SupportMap, b: &dyn SupportMap, warm: &mut Vector) -> f32 {
+    let start = match warm.try_normalize() {
+        Some(d) => d,
+        None => (-pos12.translation).try_normalize().unwrap_or(Vector::X),
+    };
+    let mut simplex = VoronoiSimplex::new();
+    simplex.reset(CsoPoint::from_shapes(pos12, a, b, start));
+    match gjk::closest_points(pos12, a, b, f32::MAX, true, &mut simplex) {
+        GJKResult::ClosestPoints(_, _, n) => {
+            *warm = n;
+            // The support points along n: a's farthest towards b, b's farthest towards a.
+            let w = CsoPoint::from_shapes(pos12, a, b, n);
+            (-w.point.dot(n)).max(0.0)
+        }
+        _ => {
+            *warm = Vector::ZERO;
+            0.0
+        }
+    }
+}
+
+/// A lower bound on the distance between two shapes: [`support_gap`] where both are support
+/// maps, the smallest over the parts of a compound, else parry's distance less its tolerance.
+fn gap(pa: &Pose, a: &dyn Shape, pb: &Pose, b: &dyn Shape) -> f32 {
+    if b.as_compound().is_some() && a.as_compound().is_none() {
+        return gap(pb, b, pa, a);
+    }
+    if let Some(c) = a.as_compound() {
+        // The nearest part, its boxes first: a part whose box is farther than the best so far
+        // cannot be nearer.
+        let other = b.compute_aabb(pb);
+        let mut best = f32::INFINITY;
+        for (p, part) in c.shapes() {
+            let at = *pa * *p;
+            let cheap = aabb_gap(&part.compute_aabb(&at), &other);
+            if cheap < best {
+                best = best.min(gap(&at, &*part.0, pb, b).max(cheap));
+            }
+        }
+        return best;
+    }
+    match (a.as_support_map(), b.as_support_map()) {
+        (Some(sa), Some(sb)) => {
+            let mut cold = Vector::ZERO;
+            support_gap(&pa.inv_mul(pb), sa, sb, &mut cold)
+        }
+        _ => query::distance(pa, a, pb, b)
+            .map_or(0.0, |d| d.distance * (1.0 - GJK_RELATIVE) - 1e-4)
+            .max(0.0),
     }
 }
 
@@ -521,11 +604,6 @@ fn box_gap(
         (None, Some(sm)) => (*other_pose, sm),
         (None, None) => return 0.0,
     };
-    let d = distance_support_map_support_map(&pa.inv_mul(&pb), a, b);
-    (d * (1.0 - GJK_RELATIVE)).max(0.0)
-}
-
-/// parry's distance of two shapes; 0 where it cannot tell.
-fn distance(pa: &Pose, a: &dyn Shape, pb: &Pose, b: &dyn Shape) -> f32 {
-    query::distance(pa, a, pb, b).map_or(0.0, |d| d.distance)
+    let mut cold = Vector::ZERO;
+    support_gap(&pa.inv_mul(&pb), a, b, &mut cold)
 }
