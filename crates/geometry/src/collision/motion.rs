@@ -444,7 +444,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entry_gap(ea, pa, &*eb.shape.0, pb, w),
+                    &|w| entries_gap(ea, pa, eb, pb, w),
                     &|| ea.hits_shape_by_gjk(pa, eb, pb),
                     Hit::SelfPair(a as usize, b as usize),
                 )
@@ -521,6 +521,15 @@ fn entry_gap(
     match (e.support(), other.as_support_map()) {
         (Some(a), Some(b)) => support_gap(&pose.inv_mul(other_pose), a, b, warm),
         _ => gap(pose, &*e.shape.0, other_pose, other),
+    }
+}
+
+/// A proven lower bound on the distance between two agent shapes at their poses (see
+/// [`support_gap`]), with the climbing supports of large hulls, started from `warm` (updated).
+fn entries_gap(a: &ShapeEntry, pa: &Pose, b: &ShapeEntry, pb: &Pose, warm: &mut Vector) -> f32 {
+    match (a.support(), b.support()) {
+        (Some(x), Some(y)) => support_gap(&pa.inv_mul(pb), x, y, warm),
+        _ => gap(pa, &*a.shape.0, pb, &*b.shape.0),
     }
 }
 
