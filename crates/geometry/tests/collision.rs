@@ -559,3 +559,86 @@ fn motion_checks_find_what_dense_sampling_finds() {
         "{c:?}"
     );
 }
+
+/// A base motion checked whole agrees with dense sampling of the base's path (4,000 poses),
+/// holding a book; a 2 mm wall the robot drives through between two free poses is found.
+#[test]
+fn base_motion_checks_find_what_dense_sampling_finds() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let q = model.default_configuration().into_vec();
+    let obstacles = Arc::new(StaticObstacles::new(vec![
+        boxed(
+            "table",
+            Vector::new(2.0, 0.0, 0.36),
+            Vector::new(0.4, 0.6, 0.36),
+        ),
+        boxed(
+            "wall",
+            Vector::new(0.0, 2.0, 1.0),
+            Vector::new(1.5, 0.001, 1.0),
+        ),
+        boxed(
+            "post",
+            Vector::new(-1.5, -1.0, 1.0),
+            Vector::new(0.1, 0.1, 1.0),
+        ),
+    ]));
+    let book = SharedShape::cuboid(0.1, 0.07, 0.03);
+    let held =
+        HeldObject::new(&model, "book", book, "r_gripper_tool_frame", Pose::IDENTITY).unwrap();
+    let mut checker =
+        CollisionChecker::new(m.clone(), obstacles, Pose::IDENTITY).with_held_object(held);
+    checker.set_self_collision(false);
+    let at = |c: &mut CollisionChecker, p: [f32; 3]| {
+        c.set_base(geometry::world::base_pose(p[0], p[1], p[2]));
+        c.is_config_free(&q)
+    };
+    let mut rng = fastrand::Rng::with_seed(9);
+    let (mut hit, mut free) = (0, 0);
+    let mut probe = checker.clone();
+    for k in 0..200 {
+        let from = [
+            rng.f32() * 4.0 - 2.0,
+            rng.f32() * 4.0 - 2.0,
+            rng.f32() * 6.0 - 3.0,
+        ];
+        let to = [
+            from[0] + rng.f32() * 2.0 - 1.0,
+            from[1] + rng.f32() * 2.0 - 1.0,
+            from[2] + rng.f32() * 3.0 - 1.5,
+        ];
+        if !at(&mut probe, from) {
+            continue;
+        }
+        let sampled = (1..=4000).any(|s| {
+            let t = s as f32 / 4000.0;
+            !at(
+                &mut probe,
+                [0, 1, 2].map(|i| from[i] + t * (to[i] - from[i])),
+            )
+        });
+        let found = checker
+            .check_base_motion(&q, from, to, 1e-4)
+            .contact
+            .is_some();
+        assert_eq!(
+            found, sampled,
+            "motion {k}: dense sampling finds a collision: {sampled}"
+        );
+        if sampled {
+            hit += 1;
+        } else {
+            free += 1;
+        }
+    }
+    assert!(hit > 20 && free > 20, "{hit} colliding, {free} free");
+    let (from, to) = ([0.0, 1.2, 0.0], [0.0, 2.8, 0.0]);
+    assert!(at(&mut probe, from) && at(&mut probe, to));
+    let c = checker.check_base_motion(&q, from, to, 1e-4);
+    assert!(
+        matches!(&c.contact, Some(Contact::Obstacle { obstacle, .. }
+            | Contact::HeldObstacle { obstacle, .. }) if obstacle == "wall"),
+        "{c:?}"
+    );
+}

@@ -16,6 +16,7 @@ use parry3d::shape::{Shape, SupportMap};
 use super::self_collision::{PairGroup, ShapeEntry};
 use super::{CollisionChecker, Contact, HeldObject, Hit, SCRATCH, Scratch, intersects};
 use crate::agent::{AgentModel, JointKind};
+use crate::world::base_pose;
 
 /// A movable joint above a link, with a bound (over all configurations) on the distance from
 /// its axis to the link frame's origin; and where only fixed joints lie between them, the
@@ -192,7 +193,6 @@ impl CollisionChecker {
         let speed: Vec<f32> = (0..model.joints().len())
             .map(|j| (model.joint_value(j, b) - model.joint_value(j, a)).abs())
             .collect();
-        let floor = floor.max(1e-6);
         SCRATCH.with(|scratch| {
             let mut s = scratch.borrow_mut();
             let (mut moving, mut groups, fixed) = self.pose_into(a, &mut s);
@@ -200,52 +200,154 @@ impl CollisionChecker {
                 // Joints outside the cache's move too: every shape and pair may.
                 (moving, groups) = (&self.agent.all_shapes, &self.agent.groups);
             }
-            let mut items = self.motion_items(&speed, moving, groups, &mut s);
+            let items = self.motion_items(&speed, moving, groups, &mut s);
             let mut q = a.to_vec();
-            let (mut t, mut configurations) = (0.0f32, 1);
-            loop {
-                let mut k = 0;
-                while k < items.len() {
-                    let item = items[k];
-                    k += 1;
-                    // Due within the window: measured now, early (which is sound), so that
-                    // pairs share the configurations posed.
-                    if item.next > t + BATCH {
-                        continue;
-                    }
-                    let remaining = item.rate * (1.0 - t);
-                    let mut warm = item.warm;
-                    let measured = self.measure(item.pair, remaining, groups, &s, &mut warm);
-                    items[k - 1].warm = warm;
-                    let next = match measured {
-                        Measure::Hit(h) => {
-                            return MotionCheck {
-                                contact: Some(self.contact(h)),
-                                configurations,
-                            };
-                        }
-                        Measure::Split => {
-                            self.split(&speed, item.pair, groups, t, &mut items);
-                            f32::INFINITY
-                        }
-                        Measure::Apart(d) => t + d.max(floor) / item.rate,
-                    };
-                    items[k - 1].next = if next > 1.0 { f32::INFINITY } else { next };
-                }
-                t = items.iter().map(|i| i.next).fold(f32::INFINITY, f32::min);
-                if t > 1.0 {
-                    return MotionCheck {
-                        contact: None,
-                        configurations,
-                    };
-                }
+            let pose_at = |t: f32, s: &mut Scratch| {
                 for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(b)) {
                     *v = x + t * (y - x);
                 }
-                self.pose_into(&q, &mut s);
-                configurations += 1;
-            }
+                self.pose_into(&q, s);
+            };
+            self.advance(items, floor, (&speed, groups), &mut s, pose_at)
         })
+    }
+
+    /// [`CollisionChecker::check_motion`] for a motion of the base, the joints at `q`: from
+    /// planar pose `from` (x, y, yaw; see [`crate::world::base_pose`]) straight to `to` (its
+    /// yaw `from`'s plus the turn, not wrapped). The agent moves as one body, so only what it
+    /// and what it holds meet in the scene is followed; the checker's own base is not used.
+    pub fn check_base_motion(
+        &self,
+        q: &[f32],
+        from: [f32; 3],
+        to: [f32; 3],
+        floor: f32,
+    ) -> MotionCheck {
+        let base_at = |t: f32| {
+            let [x, y, yaw] = [0, 1, 2].map(|i| from[i] + t * (to[i] - from[i]));
+            base_pose(x, y, yaw)
+        };
+        let mut start = self.clone();
+        start.fixed = None;
+        start.base = base_at(0.0);
+        if let Some(c) = start.first_collision(q) {
+            return MotionCheck {
+                contact: Some(c),
+                configurations: 1,
+            };
+        }
+        // The links in the base's frame, and how fast a body moves with the base.
+        let model = &self.agent.model;
+        let relative = model.link_poses(Pose::IDENTITY, q);
+        let (v, w) = (
+            Vector::new(to[0] - from[0], to[1] - from[1], 0.0).length(),
+            (to[2] - from[2]).abs(),
+        );
+        let rate = |link: usize, centre: Vector, radius: f32| {
+            let c = relative[link] * centre;
+            v + w * (Vector::new(c.x, c.y, 0.0).length() + radius)
+        };
+        let pose_at = |t: f32, s: &mut Scratch| {
+            let base = base_at(t);
+            s.links.clear();
+            s.links.extend(relative.iter().map(|l| base * *l));
+            s.poses.clear();
+            s.aabbs.clear();
+            for e in &self.agent.shapes {
+                let p = s.links[e.link] * e.local_pose;
+                s.poses.push(p);
+                s.aabbs.push(e.aabb(&p));
+            }
+        };
+        SCRATCH.with(|scratch| {
+            let mut s = scratch.borrow_mut();
+            pose_at(0.0, &mut s);
+            let mut items = Vec::new();
+            let mut push = |pair, rate: f32| {
+                if rate > 0.0 {
+                    items.push(Item {
+                        pair,
+                        rate,
+                        next: 0.0,
+                        warm: Vector::ZERO,
+                    });
+                }
+            };
+            let mut candidates = std::mem::take(&mut s.candidates);
+            for (i, e) in self.agent.shapes.iter().enumerate() {
+                let r = rate(e.link, e.local_pose * e.ball.0, e.ball.1);
+                self.obstacles
+                    .candidates(&s.aabbs[i].loosened(r), &mut candidates);
+                for &o in &candidates {
+                    push(Pair::Obstacle(i as u16, o), r);
+                }
+            }
+            for (k, h) in self.held.iter().chain(&self.other_held).enumerate() {
+                let r = rate(h.link, h.grasp.translation, h.radius);
+                let p = s.links[h.link] * h.grasp;
+                self.obstacles
+                    .candidates(&h.shape.compute_aabb(&p).loosened(r), &mut candidates);
+                for &o in &candidates {
+                    push(Pair::HeldObstacle(k as u8, o), r);
+                }
+            }
+            s.candidates = candidates;
+            self.advance(items, floor, (&[], &[]), &mut s, pose_at)
+        })
+    }
+
+    /// Conservative advancement over `items` (see the module docs), the agent posed in `s` at
+    /// the motion's start, `pose_at` posing it at a parameter `t` in [0, 1]. `speed` (per
+    /// joint) and `groups` serve the pairs of links that split into pairs of shapes.
+    fn advance(
+        &self,
+        mut items: Vec<Item>,
+        floor: f32,
+        (speed, groups): (&[f32], &[PairGroup]),
+        s: &mut Scratch,
+        mut pose_at: impl FnMut(f32, &mut Scratch),
+    ) -> MotionCheck {
+        let floor = floor.max(1e-6);
+        let (mut t, mut configurations) = (0.0f32, 1);
+        loop {
+            let mut k = 0;
+            while k < items.len() {
+                let item = items[k];
+                k += 1;
+                // Due within the window: measured now, early (which is sound), so that pairs
+                // share the configurations posed.
+                if item.next > t + BATCH {
+                    continue;
+                }
+                let remaining = item.rate * (1.0 - t);
+                let mut warm = item.warm;
+                let measured = self.measure(item.pair, remaining, groups, s, &mut warm);
+                items[k - 1].warm = warm;
+                let next = match measured {
+                    Measure::Hit(h) => {
+                        return MotionCheck {
+                            contact: Some(self.contact(h)),
+                            configurations,
+                        };
+                    }
+                    Measure::Split => {
+                        self.split(speed, item.pair, groups, t, &mut items);
+                        f32::INFINITY
+                    }
+                    Measure::Apart(d) => t + d.max(floor) / item.rate,
+                };
+                items[k - 1].next = if next > 1.0 { f32::INFINITY } else { next };
+            }
+            t = items.iter().map(|i| i.next).fold(f32::INFINITY, f32::min);
+            if t > 1.0 {
+                return MotionCheck {
+                    contact: None,
+                    configurations,
+                };
+            }
+            pose_at(t, s);
+            configurations += 1;
+        }
     }
 
     /// Every pair that may come together during the motion (posed at its start in `s`), due

@@ -13,7 +13,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
 
 use crate::planner::Solution;
-use crate::robot;
+use crate::robot::{self, MOTION_FLOOR};
 use crate::rrt::{JointPath, JointSpace, RrtParams};
 use crate::solution::{Phase, SolutionSummary, Trajectory};
 use crate::target::ReachTarget;
@@ -223,6 +223,15 @@ impl Search {
             ck.set_base(geometry::world::base_pose(b[0], b[1], b[2]));
             ck.is_config_free(&start.q)
         };
+        // The path's edges certified whole (conservative advancement), not sampled.
+        let mut certify = |a: &[f32], b: &[f32], checks: &mut usize| {
+            let mut turn = [0.0; 3];
+            start.space.delta(a, b, &mut turn);
+            let to = [a[0] + turn[0], a[1] + turn[1], a[2] + turn[2]];
+            let r = checker.check_base_motion(&start.q, [a[0], a[1], a[2]], to, MOTION_FLOOR);
+            *checks += r.configurations;
+            r.contact.is_none()
+        };
         let budget = if self.base_move {
             self.rrt_params()
         } else {
@@ -233,9 +242,17 @@ impl Search {
             max_step: 0.5,
             ..budget
         };
-        let path = crate::rrt::plan(&start.space, &start.xy_yaw, &goal, valid, &params, &mut rng)
-            .map(|(path, _)| path)
-            .map_err(|(e, _)| e);
+        let path = crate::rrt::plan_certified(
+            &start.space,
+            &start.xy_yaw,
+            &goal,
+            valid,
+            Some(&mut certify),
+            &params,
+            &mut rng,
+        )
+        .map(|(path, _)| path)
+        .map_err(|(e, _)| e);
         self.note_rrt(&path);
         path.map_err(|e| e.to_string())
     }
