@@ -1,11 +1,13 @@
-//! Certifying a straight joint-space motion free of collisions by conservative advancement
-//! (Schwarzer, Saha and Latombe, "Exact collision checking of robot paths", 2002): two bodies
-//! at distance `d` stay apart while their relative motion is under `d`, and that motion is
-//! bounded by each joint's step times the bodies' greatest distance from its axis. Each pair of
-//! bodies is re-measured on its own schedule: a far pair once a motion, a near one as it comes
-//! closer. A pair nearer than `floor` is re-measured every `floor` of relative motion, so a
-//! contact between two measurements is at most `floor / 2` deep; elsewhere the motion is free
-//! everywhere, not only at sampled configurations.
+//! Certifying a straight joint-space motion (or a straight planar motion of the base) free of
+//! collisions by conservative advancement (Schwarzer, Saha and Latombe, "Exact collision
+//! checking of robot paths", 2002): two bodies at distance `d` stay apart while their relative
+//! motion is under `d`, and that motion is bounded by each joint's step times the bodies'
+//! greatest distance from its axis. Each pair of bodies is re-measured on its own schedule: a
+//! far pair once a motion, a near one as it comes closer. A pair nearer than `floor` is
+//! re-measured every `floor` of relative motion, so a contact between two measurements is at
+//! most `floor / 2` deep; elsewhere the motion is free everywhere, not only at sampled
+//! configurations. Distances are proven lower bounds (see [`support_gap`]), never GJK's
+//! witnesses alone.
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
