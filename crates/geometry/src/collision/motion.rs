@@ -141,6 +141,18 @@ struct Item {
     warm: Vector,
 }
 
+impl Item {
+    /// Pair `pair`, due at `next`, when its bodies move relative to each other at all.
+    fn moving(pair: Pair, rate: f32, next: f32) -> Option<Item> {
+        (rate > 0.0).then_some(Item {
+            pair,
+            rate,
+            next,
+            warm: Vector::ZERO,
+        })
+    }
+}
+
 /// What a measurement of a pair found.
 enum Measure {
     /// Apart by at least this much.
@@ -265,16 +277,7 @@ impl CollisionChecker {
             let mut s = scratch.borrow_mut();
             pose_at(0.0, &mut s);
             let mut items = Vec::new();
-            let mut push = |pair, rate: f32| {
-                if rate > 0.0 {
-                    items.push(Item {
-                        pair,
-                        rate,
-                        next: 0.0,
-                        warm: Vector::ZERO,
-                    });
-                }
-            };
+            let mut push = |pair, rate: f32| items.extend(Item::moving(pair, rate, 0.0));
             let mut candidates = std::mem::take(&mut s.candidates);
             for (i, e) in self.agent.shapes.iter().enumerate() {
                 let r = rate(e.link, e.local_pose * e.ball.0, e.ball.1);
@@ -366,16 +369,7 @@ impl CollisionChecker {
         let reach = &self.agent.reach;
         let shapes = &self.agent.shapes;
         let mut items = Vec::new();
-        let mut push = |pair, rate: f32| {
-            if rate > 0.0 {
-                items.push(Item {
-                    pair,
-                    rate,
-                    next: 0.0,
-                    warm: Vector::ZERO,
-                });
-            }
-        };
+        let mut push = |pair, rate: f32| items.extend(Item::moving(pair, rate, 0.0));
         if !self.obstacles.is_empty() {
             for &i in moving {
                 let e = &shapes[i as usize];
@@ -429,16 +423,7 @@ impl CollisionChecker {
     /// due at `t`.
     fn split(&self, speed: &[f32], pair: Pair, groups: &[PairGroup], t: f32, out: &mut Vec<Item>) {
         let (shapes, reach) = (&self.agent.shapes, &self.agent.reach);
-        let mut push = |pair, rate: f32| {
-            if rate > 0.0 {
-                out.push(Item {
-                    pair,
-                    rate,
-                    next: t,
-                    warm: Vector::ZERO,
-                });
-            }
-        };
+        let mut push = |pair, rate: f32| out.extend(Item::moving(pair, rate, t));
         match pair {
             Pair::Links(g) => {
                 let g = groups[g as usize];
