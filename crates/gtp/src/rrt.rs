@@ -177,7 +177,8 @@ pub struct RrtParams {
     pub shortcut_iterations: usize,
     /// The final path is checked at `resolution / certify_factor`, on the configurations that
     /// [`JointPath::densify`] gives at that resolution, so that the path returned stays valid
-    /// when re-checked that much finer (1: no certification).
+    /// when re-checked that much finer (1: no certification); [`plan_certified`] with a
+    /// certifier checks each edge by it instead.
     pub certify_factor: u32,
 }
 
