@@ -131,14 +131,21 @@ impl ShapeEntry {
             .as_convex_polyhedron()
             .filter(|hull| hull.points().len() > CLIMB_ABOVE)
             .map(|hull| Arc::new(ClimbingHull::new(hull)));
+        // The smaller of two balls that hold the shape: `radius` about its frame's origin, or
+        // parry's bounding sphere (about its box's centre).
         let sphere = shape.compute_local_bounding_sphere();
+        let ball = if radius <= sphere.radius {
+            (Vector::ZERO, radius)
+        } else {
+            (sphere.center, sphere.radius)
+        };
         ShapeEntry {
             link,
             local_pose,
             radius,
             bounds,
             climb,
-            ball: (sphere.center, sphere.radius.min(radius)),
+            ball,
             shape,
         }
     }
