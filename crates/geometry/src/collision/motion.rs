@@ -461,7 +461,7 @@ impl CollisionChecker {
         remaining: f32,
         groups: &[PairGroup],
         s: &Scratch,
-        warm_out: &mut Vector,
+        warm: &mut Vector,
     ) -> Measure {
         let shapes = &self.agent.shapes;
         let obstacle = |o: u32| &self.obstacles.obstacles[o as usize];
@@ -469,16 +469,13 @@ impl CollisionChecker {
             let h = self.held_k(k);
             (h, s.links[h.link] * h.grasp)
         };
-        let warm = std::cell::Cell::new(*warm_out);
-        let apart_or =
+        let mut apart_or =
             |cheap: f32, exact: &dyn Fn(&mut Vector) -> f32, hit: &dyn Fn() -> bool, h: Hit| {
                 // A cheap bound that settles the rest of the motion, or is worth a few steps.
                 if cheap >= remaining.min(CHEAP_ENOUGH) {
                     return Measure::Apart(cheap);
                 }
-                let mut dir = warm.get();
-                let d = exact(&mut dir);
-                warm.set(dir);
+                let d = exact(warm);
                 if d > 0.0 {
                     Measure::Apart(d.max(cheap))
                 } else if hit() {
@@ -487,7 +484,7 @@ impl CollisionChecker {
                     Measure::Apart(cheap.max(0.0))
                 }
             };
-        let out = match pair {
+        match pair {
             Pair::Obstacle(i, o) => {
                 let (e, p, ob) = (&shapes[i as usize], &s.poses[i as usize], obstacle(o));
                 let mut cheap = aabb_gap(&s.aabbs[i as usize], &self.obstacles.aabbs[o as usize]);
@@ -496,7 +493,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entry_gap(e, p, &*ob.shape.0, &ob.pose, w),
+                    &|w| entry_gap(e, p, plain(&*ob.shape.0), &ob.pose, w),
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
                 )
@@ -533,7 +530,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entries_gap(ea, pa, eb, pb, w),
+                    &|w| entry_gap(ea, pa, entry(eb), pb, w),
                     &|| ea.hits_shape_by_gjk(pa, eb, pb),
                     Hit::SelfPair(a as usize, b as usize),
                 )
@@ -555,7 +552,7 @@ impl CollisionChecker {
                 let cheap = (ce - p.translation).length() - re - h.radius;
                 apart_or(
                     cheap,
-                    &|w| entry_gap(e, pe, &*h.shape.0, &p, w),
+                    &|w| entry_gap(e, pe, plain(&*h.shape.0), &p, w),
                     &|| e.hits(pe, &*h.shape.0, &p),
                     Hit::HeldShape(k as usize, i as usize),
                 )
@@ -570,9 +567,7 @@ impl CollisionChecker {
                     Hit::HeldPair(k as usize, l as usize),
                 )
             }
-        };
-        *warm_out = warm.get();
-        out
+        }
     }
 }
 
@@ -598,28 +593,30 @@ fn aabb_gap(a: &Aabb, b: &Aabb) -> f32 {
 }
 
 /// A lower bound on the distance between an agent shape at `pose` and another shape at
-/// `other_pose` (see [`gap`]), by GJK with the climbing support of a large hull, started from
-/// `warm` (the direction that last separated the pair; updated).
+/// `other_pose` with its support function (an agent shape's climbing one, see [`entry`]), by
+/// GJK started from `warm` (the direction that last separated the pair; updated); see [`gap`]
+/// where either has no support function.
 fn entry_gap(
     e: &ShapeEntry,
     pose: &Pose,
-    other: &dyn Shape,
+    (other, other_support): (&dyn Shape, Option<&dyn SupportMap>),
     other_pose: &Pose,
     warm: &mut Vector,
 ) -> f32 {
-    match (e.support(), other.as_support_map()) {
+    match (e.support(), other_support) {
         (Some(a), Some(b)) => support_gap(&pose.inv_mul(other_pose), a, b, warm),
         _ => gap(pose, &*e.shape.0, other_pose, other),
     }
 }
 
-/// A proven lower bound on the distance between two agent shapes at their poses (see
-/// [`support_gap`]), with the climbing supports of large hulls, started from `warm` (updated).
-fn entries_gap(a: &ShapeEntry, pa: &Pose, b: &ShapeEntry, pb: &Pose, warm: &mut Vector) -> f32 {
-    match (a.support(), b.support()) {
-        (Some(x), Some(y)) => support_gap(&pa.inv_mul(pb), x, y, warm),
-        _ => gap(pa, &*a.shape.0, pb, &*b.shape.0),
-    }
+/// A shape that is no agent shape, with its support function.
+fn plain(shape: &dyn Shape) -> (&dyn Shape, Option<&dyn SupportMap>) {
+    (shape, shape.as_support_map())
+}
+
+/// An agent shape, with its support function (the climbing one of a large hull).
+fn entry(e: &ShapeEntry) -> (&dyn Shape, Option<&dyn SupportMap>) {
+    (&*e.shape.0, e.support())
 }
 
 /// A proven lower bound on the distance between support maps `a` and `b` (`b` at `pos12` in
