@@ -510,7 +510,6 @@ fn motion_checks_find_what_dense_sampling_finds() {
     fast.set_fixed_joints(&template, &chain.dofs);
     let mut rng = fastrand::Rng::with_seed(5);
     let (mut hit, mut free) = (0, 0);
-    let mut q = template.clone();
     let mut a = template.clone();
     for k in 0..300 {
         let r = model.random_configuration(&mut rng).into_vec();
@@ -522,13 +521,7 @@ fn motion_checks_find_what_dense_sampling_finds() {
         if !full.is_config_free(&a) {
             continue;
         }
-        let sampled = (1..=4000).any(|s| {
-            let t = s as f32 / 4000.0;
-            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(&b)) {
-                *v = x + t * (y - x);
-            }
-            !full.is_config_free(&q)
-        });
+        let sampled = common::sampled_collision(&full, &a, &b, 4000);
         let checker = if k % 2 == 0 { &full } else { &fast };
         let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
         // (A contact briefer than the sampling's step would be found only by the motion check:

@@ -1,6 +1,8 @@
 //! The real PR2 and Panda of `../shared/robots` (ROS descriptions, collision meshes referenced
 //! as `package://`) load with their meshes as convex pieces.
 
+mod common;
+
 use std::path::PathBuf;
 
 use geometry::agent::{AgentModel, ConvexMode, MeshOptions, PackagePath, Primitive};
@@ -232,7 +234,7 @@ fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
     checker.set_fixed_joints(&template, &arm);
     let mut rng = fastrand::Rng::with_seed(3);
     let (mut hit, mut free) = (0, 0);
-    let (mut q, mut a) = (template.clone(), template.clone());
+    let mut a = template.clone();
     for k in 0..120 {
         let r = model.random_configuration(&mut rng).into_vec();
         let mut b = template.clone();
@@ -243,13 +245,7 @@ fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
         if !checker.is_config_free(&a) {
             continue;
         }
-        let sampled = (1..=2000).any(|s| {
-            let t = s as f32 / 2000.0;
-            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(&b)) {
-                *v = x + t * (y - x);
-            }
-            !checker.is_config_free(&q)
-        });
+        let sampled = common::sampled_collision(&checker, &a, &b, 2000);
         let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
         assert_eq!(
             found, sampled,
