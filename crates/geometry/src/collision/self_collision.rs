@@ -11,7 +11,7 @@ use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
 use super::intersects;
-use super::motion::JointReach;
+use super::motion::{JointReach, body, lower_bound_distance};
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -47,14 +47,15 @@ pub enum AllowedReason {
     Always,
     /// The model's SRDF says so (`<disable_collisions>`).
     Srdf,
-    /// Their relative pose depends on at most one joint (the two fingers of a gripper, for
-    /// example), and a sweep of that joint's whole range at `SWEEP_STEPS` + 1 values found no
-    /// contact, so they never collide.
+    /// Their relative pose depends on at most one degree of freedom (the two fingers of a
+    /// gripper, an elbow and the forearm rolling beside it), and they are proven at least
+    /// [`NEVER_MARGIN`] apart over its whole range: they never collide.
     Never,
 }
 
-/// Resolution of the sweep behind [`AllowedReason::Never`].
-pub const SWEEP_STEPS: usize = 2000;
+/// How far apart (metres) two links must stay over their degree of freedom's whole range to
+/// be left out as [`AllowedReason::Never`].
+pub const NEVER_MARGIN: f32 = 1e-4;
 
 /// The degrees of freedom that move link `b` relative to link `a` (mimic joints count as
 /// their master), sorted and deduplicated.
@@ -342,26 +343,20 @@ impl SelfCollisionModel {
             }
         }
         // Pairs whose relative pose depends on at most one degree of freedom: sweep it.
+        let reach = JointReach::new(&model);
         for &(a, b) in &candidate_links {
             if status[key(a, b)].is_some() {
                 continue;
             }
-            let dofs = relative_dofs(&model, a, b);
-            let never = match dofs.as_slice() {
+            let never = match relative_dofs(&model, a, b).as_slice() {
                 [] => true, // rigidly connected and apart in the default configuration
                 [d] => {
-                    let limits = model.dof_limits()[*d];
-                    let (lo, hi) = if limits.is_bounded() {
-                        (limits.lower, limits.upper)
-                    } else {
-                        (-std::f32::consts::PI, std::f32::consts::PI)
+                    let sweep = Sweep {
+                        model: &model,
+                        shapes: &shapes,
+                        reach: &reach,
                     };
-                    let mut q = default.as_slice().to_vec();
-                    (0..=SWEEP_STEPS).all(|k| {
-                        q[*d] = lo + (hi - lo) * k as f32 / SWEEP_STEPS as f32;
-                        model.link_poses_into(Pose::IDENTITY, &q, &mut poses);
-                        !links_collide(&shapes, &by_link, &poses, a, b)
-                    })
+                    sweep.apart_over_dof((&by_link[a], &by_link[b]), *d, default.as_slice())
                 }
                 _ => false,
             };
@@ -423,7 +418,7 @@ impl SelfCollisionModel {
             }
         }
         SelfCollisionModel {
-            reach: JointReach::new(&model),
+            reach,
             model,
             all_shapes: (0..shapes.len() as u16).collect(),
             shapes,
@@ -458,6 +453,91 @@ impl SelfCollisionModel {
         }))
     }
 }
+
+/// What a sweep of one degree of freedom needs of the model being built.
+struct Sweep<'a> {
+    model: &'a AgentModel,
+    shapes: &'a [ShapeEntry],
+    reach: &'a JointReach,
+}
+
+impl Sweep<'_> {
+    /// Whether shapes `a` and shapes `b` (indices into `shapes`, of two links whose relative
+    /// pose depends on degree of freedom `d` alone) stay at least [`NEVER_MARGIN`] apart over
+    /// `d`'s whole range (a continuous joint's full turn), the other joints at `q`. Proven by
+    /// conservative advancement, as a motion check is (see `motion.rs`): each pair of shapes
+    /// is measured (a proven lower bound on its distance, never parry's intersection test,
+    /// which calls hulls a millimetre apart touching) and measured again once its bodies may
+    /// have moved by that much.
+    fn apart_over_dof(&self, (a, b): (&[usize], &[usize]), d: usize, q: &[f32]) -> bool {
+        let model = self.model;
+        let limits = model.dof_limits()[d];
+        let (lo, hi) = if limits.is_bounded() {
+            (limits.lower, limits.upper)
+        } else {
+            (-std::f32::consts::PI, std::f32::consts::PI)
+        };
+        let (mut from, mut to) = (q.to_vec(), q.to_vec());
+        (from[d], to[d]) = (lo, hi);
+        let speed: Vec<f32> = (0..model.joints().len())
+            .map(|j| (model.joint_value(j, &to) - model.joint_value(j, &from)).abs())
+            .collect();
+        // Each pair of shapes, its relative speed bound and when it is measured next.
+        let mut items: Vec<(usize, usize, f32, f32)> = Vec::new();
+        for &i in a {
+            for &j in b {
+                let rate =
+                    self.reach
+                        .rate(&speed, body(&self.shapes[i]), Some(body(&self.shapes[j])));
+                items.push((i, j, rate, 0.0));
+            }
+        }
+        let (mut t, mut poses) = (0.0f32, Vec::new());
+        loop {
+            from[d] = lo + t * (hi - lo);
+            model.link_poses_into(Pose::IDENTITY, &from, &mut poses);
+            for (i, j, rate, next) in items.iter_mut() {
+                if *next > t + SWEEP_BATCH {
+                    continue;
+                }
+                let gap = self.gap(*i, *j, &poses);
+                if gap < NEVER_MARGIN {
+                    return false;
+                }
+                *next = if *rate > 0.0 {
+                    t + gap / *rate
+                } else {
+                    f32::INFINITY
+                };
+            }
+            t = items.iter().map(|i| i.3).fold(f32::INFINITY, f32::min);
+            if t > 1.0 {
+                return true;
+            }
+        }
+    }
+
+    /// A proven lower bound on the distance of shapes `i` and `j`, their links at `poses`:
+    /// their balls' where that settles it, else the exact one.
+    fn gap(&self, i: usize, j: usize, poses: &[Pose]) -> f32 {
+        let (ei, ej) = (&self.shapes[i], &self.shapes[j]);
+        let (pi, pj) = (
+            poses[ei.link] * ei.local_pose,
+            poses[ej.link] * ej.local_pose,
+        );
+        let balls = (pi * ei.ball.0 - pj * ej.ball.0).length() - ei.ball.1 - ej.ball.1;
+        if balls >= SWEEP_CHEAP_ENOUGH {
+            return balls;
+        }
+        lower_bound_distance(&pi, &*ei.shape.0, &pj, &*ej.shape.0).max(balls)
+    }
+}
+
+/// Pairs due within this much of a sweep (of its parameter, 0 to 1) are measured together.
+const SWEEP_BATCH: f32 = 0.001;
+
+/// A bound from the shapes' balls of at least this (metres) is used as it is in a sweep.
+const SWEEP_CHEAP_ENOUGH: f32 = 0.01;
 
 /// Which of the pairs of links `candidates` collide in at least `options.always_fraction` of
 /// `options.samples` random configurations. A pair is no longer tested once it has missed in
