@@ -467,7 +467,7 @@ impl Iterator for SolutionStream {
             if let Some(s) = self.search.next_solution() {
                 return Some(s);
             }
-            self.base_moves = Some(BaseMoves::after(&self.search, self.seed)?);
+            self.base_moves = Some(BaseMoves::after(&mut self.search, self.seed)?);
         }
         let moves = self.base_moves.as_mut()?;
         let mut s = moves.next_solution(&self.search)?;

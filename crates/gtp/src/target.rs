@@ -20,6 +20,8 @@ const LARGE_HALF_SIZE: f32 = 0.25;
 pub enum ReachTarget {
     /// One point: a small object's centre, an agent's eyes.
     Point(Vector),
+    /// Several points, any one of which will do (places to put an object).
+    Points(Vec<Vector>),
     /// Support-surface rectangles: world pose of each centre (rectangle in its x-y plane) and
     /// half sizes.
     Surfaces(Vec<(Pose, [f32; 2])>),
@@ -81,8 +83,15 @@ impl ReachTarget {
 
     /// The point of the target nearest `p`.
     pub fn nearest(&self, p: Vector) -> Vector {
+        let nearest_of = |list: &[Vector]| {
+            list.iter()
+                .copied()
+                .min_by(|a, b| (*a - p).length().total_cmp(&(*b - p).length()))
+                .unwrap_or(p)
+        };
         match self {
             ReachTarget::Point(c) => *c,
+            ReachTarget::Points(list) => nearest_of(list),
             ReachTarget::Person { shoulders, reach } => shoulders
                 .iter()
                 .map(|s| *s + (p - *s).clamp_length_max(*reach))
@@ -104,6 +113,11 @@ impl ReachTarget {
 
     /// Whether a point of the target lies within `reach` of one of `shoulders`.
     pub fn within_reach(&self, shoulders: &[Vector], reach: f32) -> bool {
+        if let ReachTarget::Points(list) = self {
+            return list
+                .iter()
+                .any(|p| shoulders.iter().any(|s| (*p - *s).length() <= reach));
+        }
         shoulders
             .iter()
             .any(|s| (self.nearest(*s) - *s).length() <= reach)
@@ -120,6 +134,7 @@ impl ReachTarget {
         };
         match self {
             ReachTarget::Point(c) => add(*c),
+            ReachTarget::Points(list) => list.iter().for_each(|p| add(*p)),
             ReachTarget::Surfaces(list) => {
                 for (pose, h) in list {
                     for (sx, sy) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
@@ -146,6 +161,15 @@ impl ReachTarget {
     /// around the footprint, about 0.15 m apart (24 per ring around a point), nearest `from`
     /// first.
     pub fn base_positions(&self, from: Vector) -> Vec<Vector> {
+        if let ReachTarget::Points(list) = self {
+            // Around each point, as around a point target.
+            let mut out: Vec<Vector> = list
+                .iter()
+                .flat_map(|p| ReachTarget::Point(*p).base_positions(from))
+                .collect();
+            out.sort_by(|a, b| (*a - from).length().total_cmp(&(*b - from).length()));
+            return out;
+        }
         let (lo, hi) = self.footprint();
         let rings: &[f32] = match self {
             ReachTarget::Point(_) => &POINT_RINGS,
@@ -238,5 +262,29 @@ mod tests {
         assert!(p.x < 0.9);
         // Beyond both reaches, it is not.
         assert!(!person.within_reach(&[Vector::new(-1.0, 0.0, 1.2)], reach));
+    }
+
+    /// Places of which any will do: reached when one is, the poses around each, nearest first.
+    #[test]
+    fn several_places_are_reached_where_one_is() {
+        let near = Vector::new(1.0, 0.0, 0.8);
+        let far = Vector::new(-3.0, 0.0, 0.8);
+        let places = ReachTarget::Points(vec![far, near]);
+        let shoulder = [Vector::new(0.4, 0.0, 1.0)];
+        assert!(places.within_reach(&shoulder, 0.8));
+        assert!(!ReachTarget::Point(far).within_reach(&shoulder, 0.8));
+        assert_eq!(places.nearest(Vector::ZERO), near);
+        let poses = places.base_positions(Vector::ZERO);
+        assert_eq!(
+            poses.len(),
+            2 * ReachTarget::Point(near).base_positions(Vector::ZERO).len()
+        );
+        // Nearest first: the first poses ring the near place.
+        assert!((poses[0] - Vector::new(near.x, near.y, 0.0)).length() < 0.9);
+        assert!(
+            poses
+                .windows(2)
+                .all(|w| w[0].length() <= w[1].length() + 1e-6)
+        );
     }
 }

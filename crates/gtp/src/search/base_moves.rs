@@ -11,7 +11,11 @@
 //! [`STEP_RADIUS`] is reached (the target too far for the arm from every one, or none free), the
 //! poses within the agent's `move_radius` are tried the same way: level 4 is a drive (a member
 //! at the far end of a long counter is handed a book after the robot drives round to them).
+//! The target is the object (a pick), the support (a place-on) or the person (a hand-over); a
+//! put-away's is the places that would hide the object from the person, the nearest of each
+//! surface, whether the arm reaches them from here or not.
 
+use parry3d::math::Vector;
 use std::time::Duration;
 
 use crate::planner::{Solution, Task};
@@ -38,6 +42,9 @@ pub(crate) struct BaseMoves {
     radius: f32,
     /// The agent's move radius, searched once no pose within [`STEP_RADIUS`] was reached.
     drive_radius: Option<f32>,
+    /// Places the poses must reach one of, in place of what the task's `navigate-to` would
+    /// (see [`stances`]).
+    toward: Option<Vec<Vector>>,
     /// The drive to the current pose and the task's search from there.
     here: Option<(Solution, Search)>,
     /// Why the task failed where the robot stood.
@@ -58,7 +65,7 @@ impl BaseMoves {
     /// The base moves after `search` failed from where the robot stands, or `None` when moving
     /// the base cannot help (a limit stopped it, the object has no grasp, the grippers are
     /// busy), the robot effort allowed is below 2, or the task is a take or a navigate-to.
-    pub(crate) fn after(search: &Search, seed: u64) -> Option<BaseMoves> {
+    pub(crate) fn after(search: &mut Search, seed: u64) -> Option<BaseMoves> {
         let failure = search.failure.clone()?;
         let effort = search.c.robot_effort;
         if effort < 2
@@ -69,7 +76,7 @@ impl BaseMoves {
             return None;
         }
         // The agent's own limits (a robot fixed to a table neither turns nor steps).
-        let limits = &search.world.agent(search.setup.agent).effort;
+        let limits = search.world.agent(search.setup.agent).effort.clone();
         let radius = if effort >= 4 {
             STEP_RADIUS.min(limits.move_radius)
         } else {
@@ -79,7 +86,15 @@ impl BaseMoves {
             return None;
         }
         let left = search.c.time_limit.checked_sub(search.elapsed)?;
-        let stances = stances(search, radius, left, seed)?;
+        // A put-away heads for the places that hide the object from the person (the nearest
+        // of each surface): around the object held, the robot would stay where it found none.
+        let toward = (search.task.kind == TaskKind::PutAway && search.held)
+            .then(|| {
+                let base = search.world.agent_state(search.setup.agent).base;
+                search.places_for_human(base.translation)
+            })
+            .filter(|places| !places.is_empty());
+        let stances = stances(search, (radius, toward.clone()), left, seed)?;
         // Level 4 drives within the agent's move radius when no step reaches.
         let drive_radius =
             (radius > 0.0 && limits.move_radius > radius).then_some(limits.move_radius);
@@ -87,6 +102,7 @@ impl BaseMoves {
             stances,
             radius,
             drive_radius,
+            toward,
             here: None,
             at_start: failure,
             finished: Stats::default(),
@@ -166,7 +182,7 @@ impl BaseMoves {
         };
         let Some(wider) = self
             .time_left()
-            .and_then(|left| stances(template, radius, left, self.seed))
+            .and_then(|left| stances(template, (radius, self.toward.clone()), left, self.seed))
         else {
             return false;
         };
@@ -268,8 +284,14 @@ impl BaseMoves {
 }
 
 /// The `navigate-to` search over the poses within `radius` of where the robot stands in
-/// `search` (0: turning in place), within `time_left` (what the call has left).
-fn stances(search: &Search, radius: f32, time_left: Duration, seed: u64) -> Option<Search> {
+/// `search` (0: turning in place), within `time_left` (what the call has left): poses that
+/// reach one of the places `toward` where given, else what [`stance_task`] targets.
+fn stances(
+    search: &Search,
+    (radius, toward): (f32, Option<Vec<Vector>>),
+    time_left: Duration,
+    seed: u64,
+) -> Option<Search> {
     let nav = stance_task(search)?;
     let mut c = search.c.clone();
     c.time_limit = time_left;
@@ -284,6 +306,7 @@ fn stances(search: &Search, radius: f32, time_left: Duration, seed: u64) -> Opti
     .ok()?
     .into_base_move(search);
     stances.stance_radius = Some(radius);
+    stances.stance_places = toward;
     Some(stances)
 }
 

@@ -234,6 +234,9 @@ pub(crate) struct Search {
     /// A navigate-to that serves a base move inside another task: only the poses within this
     /// distance of the base (metres), turning in place first ([`base_moves`]).
     stance_radius: Option<f32>,
+    /// For such a navigate-to, places of which its poses must reach one (a put-away's hiding
+    /// places), in place of its target.
+    stance_places: Option<Vec<Vector>>,
 }
 
 impl Search {
@@ -309,6 +312,7 @@ impl Search {
             done: false,
             person: None,
             stance_radius: None,
+            stance_places: None,
             base_move: false,
         })
     }

@@ -46,6 +46,9 @@ impl Search {
             ));
         }
         let target = match (self.task.target_object, self.task.human) {
+            _ if self.stance_places.is_some() => {
+                ReachTarget::Points(self.stance_places.clone().unwrap_or_default())
+            }
             (Some(o), _) => ReachTarget::object(&self.world, o),
             (None, Some(h)) => ReachTarget::person(&self.world, h),
             (None, None) => ReachTarget::Point(self.task.target_point?),

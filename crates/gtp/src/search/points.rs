@@ -73,9 +73,36 @@ impl Search {
         pts
     }
 
+    /// Per support surface, its point nearest `from` (horizontally) where the object would
+    /// meet the task's constraints on the human at its highest effort level (hidden from their
+    /// view, out of their reach), whether the robot reaches it or not: where a put-away's base
+    /// moves head.
+    pub(super) fn places_for_human(&mut self, from: Vector) -> Vec<Vector> {
+        let Some(&level) = self.levels.last() else {
+            return Vec::new();
+        };
+        let lift = Vector::Z * self.object_half_height();
+        let flat = |p: &Vector| Vector::new(p.x - from.x, p.y - from.y, 0.0).length();
+        let mut places = Vec::new();
+        for mut grid in self.surface_grids() {
+            grid.sort_by(|a, b| flat(a).total_cmp(&flat(b)));
+            places.extend(
+                grid.into_iter().find(|&p| {
+                    self.meets_human_constraints(p + lift, level) && self.air_is_free(p)
+                }),
+            );
+        }
+        places
+    }
+
     /// The grid points on the support surfaces a placement may use: the task's support, or
     /// every surface but the object's own, 3 cm in from their edges.
     fn surface_grid(&self) -> Vec<Vector> {
+        self.surface_grids().concat()
+    }
+
+    /// [`Search::surface_grid`], surface by surface.
+    fn surface_grids(&self) -> Vec<Vec<Vector>> {
         let supports: Vec<ObjectId> = match (self.task.kind, self.task.support) {
             (TaskKind::PlaceOn, Some(s)) => vec![s],
             _ => self
@@ -84,7 +111,7 @@ impl Search {
                 .filter(|&id| Some(id) != self.object && !self.world.object(id).surfaces.is_empty())
                 .collect(),
         };
-        let mut raw = Vec::new();
+        let mut grids = Vec::new();
         for s in supports {
             let pose = self.world.object_pose(s);
             for surf in &self.world.object(s).surfaces {
@@ -98,16 +125,18 @@ impl Search {
                 let ny = (2.0 * hy / step).floor() as i32;
                 let ox = -(nx as f32) * step / 2.0;
                 let oy = -(ny as f32) * step / 2.0;
+                let mut grid = Vec::new();
                 for i in 0..=nx {
                     for j in 0..=ny {
                         let local = surf.centre
                             + Vector::new(ox + i as f32 * step, oy + j as f32 * step, 0.0);
-                        raw.push(pose.transform_point(local));
+                        grid.push(pose.transform_point(local));
                     }
                 }
+                grids.push(grid);
             }
         }
-        raw
+        grids
     }
 
     /// The points of `raw` not tried at a lower level that the robot reaches and that meet
