@@ -582,6 +582,38 @@ impl AgentModel {
         Ok(self)
     }
 
+    /// This model with `groups` added to its SRDF's (what a MoveIt SRDF lacks, written in a
+    /// scene): each chain must run down the model from its base link to its tip, each joint
+    /// must be the model's, and no group may have the name of one of the SRDF's.
+    pub fn with_groups(mut self, groups: &[srdf::Group]) -> Result<AgentModel, ModelError> {
+        if groups.is_empty() {
+            return Ok(self);
+        }
+        let mut semantics = (*self.semantics).clone();
+        for g in groups {
+            let err = |message: String| ModelError::Invalid {
+                source_name: self.name.clone(),
+                line: None,
+                message: format!("group `{}`: {message}", g.name),
+            };
+            if semantics.group(&g.name).is_some() {
+                return Err(err(format!(
+                    "the SRDF {} already has a group of that name",
+                    semantics.source_name
+                )));
+            }
+            if let Some((base, tip)) = &g.chain {
+                self.chain_between(base, tip)?;
+            }
+            if let Some(j) = g.joints.iter().find(|j| !self.joint_index.contains_key(*j)) {
+                return Err(err(format!("no joint `{j}` in the URDF")));
+            }
+            semantics.groups.push(g.clone());
+        }
+        self.semantics = Arc::new(semantics);
+        Ok(self)
+    }
+
     /// What the SRDF says (empty when the model has none).
     pub fn semantics(&self) -> &Semantics {
         &self.semantics

@@ -238,6 +238,19 @@ struct AgentSpec {
     /// Fixed frames added to the URDF (what the description lacks: a tool frame, a camera).
     #[serde(default)]
     frames: Vec<FrameSpec>,
+    /// SRDF groups the SRDF lacks (MoveIt's has no head or torso group), by name.
+    #[serde(default)]
+    groups: BTreeMap<String, GroupSpec>,
+}
+
+/// An SRDF group written in the scene, as MoveIt writes one: a chain, or joints.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct GroupSpec {
+    base_link: Option<String>,
+    tip_link: Option<String>,
+    #[serde(default)]
+    joints: Vec<String>,
 }
 
 /// Optional overrides of an agent's effort parameters (see [`crate::effort::EffortParams`]).
@@ -358,6 +371,8 @@ pub struct AgentSpecResolved {
     pub sitting: bool,
     pub colour: [u8; 3],
     pub(crate) effort: EffortSpec,
+    /// SRDF groups added to the SRDF's (see `groups` in docs/scene-format.md).
+    pub groups: Vec<crate::agent::srdf::Group>,
     /// Links whose collision meshes are made by a mode other than the rule's.
     pub convex_modes: Vec<(String, crate::agent::ConvexMode)>,
 }
@@ -712,8 +727,43 @@ fn agent_spec(
             KindSpec::Human => [225, 180, 150],
         }),
         effort,
+        groups: groups(ck, a, at)?,
         convex_modes: convex_modes(ck, a, at)?,
     })
+}
+
+/// The agent's `groups`, each a chain (`base_link` and `tip_link`) or joints, not both.
+fn groups(
+    ck: &Checker,
+    a: &AgentSpec,
+    at: &str,
+) -> Result<Vec<crate::agent::srdf::Group>, SceneError> {
+    let mut out = Vec::new();
+    for (name, g) in &a.groups {
+        let chain = match (&g.base_link, &g.tip_link) {
+            (Some(b), Some(t)) => Some((b.clone(), t.clone())),
+            (None, None) => None,
+            _ => {
+                return Err(ck.err(
+                    &format!("{at}.groups.{name}"),
+                    "a chain needs both `base_link` and `tip_link`".into(),
+                ));
+            }
+        };
+        if chain.is_some() != g.joints.is_empty() {
+            return Err(ck.err(
+                &format!("{at}.groups.{name}"),
+                "give a chain (`base_link`, `tip_link`) or `joints`, one of the two".into(),
+            ));
+        }
+        out.push(crate::agent::srdf::Group {
+            name: name.clone(),
+            chain,
+            joints: g.joints.clone(),
+            ..Default::default()
+        });
+    }
+    Ok(out)
 }
 
 /// The agent's `frames`, checked: finite offsets within a few metres.

@@ -275,12 +275,15 @@ impl World {
                 let model =
                     AgentModel::from_urdf_str_with(&text, &spec.urdf.display().to_string(), meshes)
                         .map_err(|e| scene.error(&format!("{at}.urdf"), e.to_string()))?;
-                match &spec.srdf {
+                let model = match &spec.srdf {
                     Some(path) => model
                         .with_srdf_file(path)
-                        .map_err(|e| scene.error(&format!("{at}.srdf"), e.to_string())),
-                    None => Ok(model),
-                }
+                        .map_err(|e| scene.error(&format!("{at}.srdf"), e.to_string()))?,
+                    None => model,
+                };
+                model
+                    .with_groups(&spec.groups)
+                    .map_err(|e| scene.error(&format!("{at}.groups"), e.to_string()))
             };
             let model = load(&meshes)?;
             for (link, _) in &spec.convex_modes {
