@@ -252,7 +252,18 @@ fn shade(colour: [u8; 3], normal: Vector, view_dir: Vector) -> [u8; 3] {
 /// Renders the world from `camera` at `width` x `height` pixels, in parallel over rows.
 /// The floor (z = 0) is drawn as a grey checkerboard (it owns no pixels in the id buffer).
 pub fn render(world: &World, camera: &Camera, width: usize, height: usize) -> Rendered {
-    render_scene(&SceneBvh::new(world), camera, width, height)
+    let scene = SceneBvh::from_bodies(outside(world.bodies(), camera));
+    render_scene(&scene, camera, width, height)
+}
+
+/// `bodies` but those the camera is inside of: an eye inside its own sensor's housing (the real
+/// PR2's camera in the hull of its Kinect) sees out of it, as the visibility test's does.
+fn outside<'a>(bodies: Vec<Body<'a>>, camera: &Camera) -> Vec<Body<'a>> {
+    let eye = camera.pose.translation;
+    bodies
+        .into_iter()
+        .filter(|b| !b.shape.contains_point(&b.pose, eye))
+        .collect()
 }
 
 /// Renders the world as [`render`] does, but with every agent link that has URDF visual meshes
@@ -267,7 +278,7 @@ pub fn render_visual(
     height: usize,
 ) -> (Rendered, Vec<String>) {
     let drawn = VisualBodies::of(world);
-    let scene = SceneBvh::from_bodies(drawn.bodies());
+    let scene = SceneBvh::from_bodies(outside(drawn.bodies(), camera));
     (render_scene(&scene, camera, width, height), drawn.warnings)
 }
 
