@@ -778,7 +778,9 @@ mod tests {
             let rotation = turn(&mut rng, 0.2);
             let mut pos12 = Pose::from_parts(Vector::new(0.08, 0.0, 0.0), rotation);
             let target = 0.0005 + 0.0045 * rng.f32();
-            let d = query::distance(&Pose::IDENTITY, &a, &pos12, &b).unwrap().distance;
+            let d = query::distance(&Pose::IDENTITY, &a, &pos12, &b)
+                .unwrap()
+                .distance;
             pos12.translation.x += target - d;
             let Ok(d) = query::distance(&Pose::IDENTITY, &a, &pos12, &b) else {
                 continue;
