@@ -45,13 +45,15 @@ impl Search {
                     .into(),
             ));
         }
-        let target = match (self.task.target_object, self.task.human) {
-            _ if self.stance_places.is_some() => {
-                ReachTarget::Points(self.stance_places.clone().unwrap_or_default())
-            }
-            (Some(o), _) => ReachTarget::object(&self.world, o),
-            (None, Some(h)) => ReachTarget::person(&self.world, h),
-            (None, None) => ReachTarget::Point(self.task.target_point?),
+        let target = match (
+            &self.stance_places,
+            self.task.target_object,
+            self.task.human,
+        ) {
+            (Some(places), _, _) => ReachTarget::Points(places.clone()),
+            (None, Some(o), _) => ReachTarget::object(&self.world, o),
+            (None, None, Some(h)) => ReachTarget::person(&self.world, h),
+            (None, None, None) => ReachTarget::Point(self.task.target_point?),
         };
         if self.cursor.points.is_none() {
             self.cursor.points = Some(self.base_candidates(&target));
