@@ -49,13 +49,13 @@ pub enum AllowedReason {
     Srdf,
     /// Their relative pose depends on at most one degree of freedom (the two fingers of a
     /// gripper, an elbow and the forearm rolling beside it), and they are proven at least
-    /// [`NEVER_MARGIN`] apart over its whole range: they never collide.
+    /// 0.1 mm apart over its whole range: they never collide.
     Never,
 }
 
 /// How far apart (metres) two links must stay over their degree of freedom's whole range to
 /// be left out as [`AllowedReason::Never`].
-pub const NEVER_MARGIN: f32 = 1e-4;
+const NEVER_MARGIN: f32 = 1e-4;
 
 /// The degrees of freedom that move link `b` relative to link `a` (mimic joints count as
 /// their master), sorted and deduplicated.
