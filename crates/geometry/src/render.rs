@@ -257,7 +257,7 @@ pub fn render(world: &World, camera: &Camera, width: usize, height: usize) -> Re
 }
 
 /// `bodies` but those the camera is inside of: an eye inside its own sensor's housing (the real
-/// PR2's camera in the hull of its Kinect) sees out of it, as the visibility test's does.
+/// PR2's camera in the hull of its Kinect) sees out of it, as the visibility test's eye does.
 fn outside<'a>(bodies: Vec<Body<'a>>, camera: &Camera) -> Vec<Body<'a>> {
     let eye = camera.pose.translation;
     bodies

@@ -113,11 +113,6 @@ impl ReachTarget {
 
     /// Whether a point of the target lies within `reach` of one of `shoulders`.
     pub fn within_reach(&self, shoulders: &[Vector], reach: f32) -> bool {
-        if let ReachTarget::Points(list) = self {
-            return list
-                .iter()
-                .any(|p| shoulders.iter().any(|s| (*p - *s).length() <= reach));
-        }
         shoulders
             .iter()
             .any(|s| (self.nearest(*s) - *s).length() <= reach)
