@@ -270,15 +270,26 @@ fn the_real_pr2_turns_its_head_by_the_groups_its_scene_adds() {
     let shipped = root().join("domains/library/scene-far-pos-real-pr2.toml");
     let facts = robot_facts(&shipped);
     assert!(facts.contains("white-book is Vis with E=1"), "{facts}");
-    // Without them the head does not turn: the robot must turn around (level 2).
     let text = std::fs::read_to_string(&shipped).unwrap();
     let start = text.find("[agents.groups]").expect("the scene's groups");
     let end = start + text[start..].find("\n\n").unwrap();
-    let dir = root().join("domains/library");
-    let path = dir.join(format!("no-groups-{}.toml", std::process::id()));
-    std::fs::write(&path, format!("{}{}", &text[..start], &text[end..])).unwrap();
-    let facts = robot_facts(&path);
-    let _ = std::fs::remove_file(&path);
+    let variant = |groups: &str| {
+        // Beside the shipped scene: its paths are relative to its folder.
+        let path = root().join(format!(
+            "domains/library/groups-variant-{}.toml",
+            std::process::id()
+        ));
+        std::fs::write(&path, format!("{}{groups}{}", &text[..start], &text[end..])).unwrap();
+        let facts = robot_facts(&path);
+        let _ = std::fs::remove_file(&path);
+        facts
+    };
+    // The head given by its joints, as an SRDF may: the same chain.
+    let joints = "[agents.groups]\nhead = { joints = [\"head_pan_joint\", \"head_tilt_joint\"] }";
+    let facts = variant(joints);
+    assert!(facts.contains("white-book is Vis with E=1"), "{facts}");
+    // Without them the head does not turn: the robot must turn around (level 2).
+    let facts = variant("");
     assert!(facts.contains("white-book is Vis with E=2"), "{facts}");
 }
 

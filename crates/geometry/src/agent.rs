@@ -584,7 +584,8 @@ impl AgentModel {
 
     /// This model with `groups` added to its SRDF's (what a MoveIt SRDF lacks, written in a
     /// scene): each chain must run down the model from its base link to its tip, each joint
-    /// must be the model's, and no group may have the name of one of the SRDF's.
+    /// must be the model's (joints that form a chain are that chain, as in an SRDF), and no
+    /// group may have the name of one of the SRDF's.
     pub fn with_groups(mut self, groups: &[srdf::Group]) -> Result<AgentModel, ModelError> {
         if groups.is_empty() {
             return Ok(self);
@@ -608,7 +609,12 @@ impl AgentModel {
             if let Some(j) = g.joints.iter().find(|j| !self.joint_index.contains_key(*j)) {
                 return Err(err(format!("no joint `{j}` in the URDF")));
             }
-            semantics.groups.push(g.clone());
+            // As the SRDF's groups are read: joints that form a chain are that chain.
+            let mut g = g.clone();
+            if g.chain.is_none() {
+                g.chain = srdf::joints_chain(&self, &g.joints);
+            }
+            semantics.groups.push(g);
         }
         self.semantics = Arc::new(semantics);
         Ok(self)

@@ -321,7 +321,7 @@ fn group(
 /// The chain a group given by its joints spans (MoveIt treats such a group as a chain): from
 /// the parent link of its joint nearest the root to the child link of its deepest joint, when
 /// the group's movable joints are exactly that chain's; `None` otherwise.
-fn joints_chain(model: &AgentModel, joints: &[String]) -> Option<(String, String)> {
+pub(super) fn joints_chain(model: &AgentModel, joints: &[String]) -> Option<(String, String)> {
     let ids: Vec<usize> = joints.iter().filter_map(|j| model.joint_id(j)).collect();
     let depth = |mut l: usize| {
         let mut d = 0;
