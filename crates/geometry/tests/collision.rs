@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::posture;
+use common::{boxed, posture};
 use std::sync::Arc;
 
 use geometry::agent::AgentModel;
@@ -23,14 +23,6 @@ fn self_model(name: &str) -> Arc<SelfCollisionModel> {
         model(name),
         &SelfCollisionOptions::default(),
     ))
-}
-
-fn boxed(name: &str, centre: Vector, half: Vector) -> Obstacle {
-    Obstacle {
-        name: name.to_string(),
-        pose: Pose::from_translation(centre),
-        shape: SharedShape::cuboid(half.x, half.y, half.z),
-    }
 }
 
 fn pr2_checker(obstacles: Vec<Obstacle>) -> CollisionChecker {
@@ -489,18 +481,7 @@ fn motion_checks_find_what_dense_sampling_finds() {
     let m = self_model("pr2.urdf");
     let model = m.model().clone();
     let template = model.default_configuration().into_vec();
-    let obstacles = Arc::new(StaticObstacles::new(vec![
-        boxed(
-            "table",
-            Vector::new(0.95, -0.4, 0.3),
-            Vector::new(0.4, 0.25, 0.3),
-        ),
-        boxed(
-            "slab",
-            Vector::new(0.8, -0.45, 0.9),
-            Vector::new(0.3, 0.001, 0.3),
-        ),
-    ]));
+    let obstacles = common::table_and_slab();
     let chain = model.chain("right_arm").unwrap();
     let book = SharedShape::cuboid(0.1, 0.07, 0.03);
     let held =
@@ -508,34 +489,14 @@ fn motion_checks_find_what_dense_sampling_finds() {
     let full = CollisionChecker::new(m.clone(), obstacles, Pose::IDENTITY).with_held_object(held);
     let mut fast = full.clone();
     fast.set_fixed_joints(&template, &chain.dofs);
-    let mut rng = fastrand::Rng::with_seed(5);
-    let (mut hit, mut free) = (0, 0);
-    let mut a = template.clone();
-    for k in 0..300 {
-        let r = model.random_configuration(&mut rng).into_vec();
-        let mut b = template.clone();
-        for &d in &chain.dofs {
-            a[d] = r[d];
-            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
-        }
-        if !full.is_config_free(&a) {
-            continue;
-        }
-        let sampled = common::sampled_collision(&full, &a, &b, 4000);
-        let checker = if k % 2 == 0 { &full } else { &fast };
-        let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
-        // (A contact briefer than the sampling's step would be found only by the motion check:
-        // none among these.)
-        assert_eq!(
-            found, sampled,
-            "motion {k}: dense sampling finds a collision: {sampled}"
-        );
-        if sampled {
-            hit += 1;
-        } else {
-            free += 1;
-        }
-    }
+    // Every other motion checked with the fixed-joints cache. (A contact briefer than the
+    // sampling's step would be found only by the motion check: none among these.)
+    let (hit, free) = common::motions_agree_with_sampling(
+        &model,
+        (&full, &[&full, &fast]),
+        (&template, &chain.dofs),
+        (5, 300, 4000),
+    );
     assert!(hit > 20 && free > 20, "{hit} colliding, {free} free");
     // The right arm swung through the slab: both ends free, the middle not.
     let swing = |yaw: f32| {

@@ -185,11 +185,8 @@ fn report_fill_ratios() {
 #[test]
 #[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
 fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
-    use geometry::collision::{
-        CollisionChecker, Obstacle, SelfCollisionModel, SelfCollisionOptions, StaticObstacles,
-    };
-    use parry3d::math::{Pose, Vector};
-    use parry3d::shape::SharedShape;
+    use geometry::collision::{CollisionChecker, SelfCollisionModel, SelfCollisionOptions};
+    use parry3d::math::Pose;
     use std::sync::Arc;
 
     let decompose = ["r_upper_arm_link", "r_forearm_link", "torso_lift_link"];
@@ -200,24 +197,7 @@ fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
     let model = Arc::new(load("pr2_description/urdf/robot.xml", &modes));
     let options = SelfCollisionOptions::default();
     let self_model = Arc::new(SelfCollisionModel::new(model.clone(), &options));
-    let boxed = |name: &str, c: Vector, h: Vector| Obstacle {
-        name: name.into(),
-        pose: Pose::from_translation(c),
-        shape: SharedShape::cuboid(h.x, h.y, h.z),
-    };
-    let obstacles = Arc::new(StaticObstacles::new(vec![
-        boxed(
-            "table",
-            Vector::new(0.95, -0.4, 0.3),
-            Vector::new(0.4, 0.25, 0.3),
-        ),
-        boxed(
-            "slab",
-            Vector::new(0.8, -0.45, 0.9),
-            Vector::new(0.3, 0.001, 0.3),
-        ),
-    ]));
-    let mut checker = CollisionChecker::new(self_model, obstacles, Pose::IDENTITY);
+    let mut checker = CollisionChecker::new(self_model, common::table_and_slab(), Pose::IDENTITY);
     let arm: Vec<usize> = [
         "r_shoulder_pan_joint",
         "r_shoulder_lift_joint",
@@ -232,31 +212,12 @@ fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
     .collect();
     let template = model.default_configuration().into_vec();
     checker.set_fixed_joints(&template, &arm);
-    let mut rng = fastrand::Rng::with_seed(3);
-    let (mut hit, mut free) = (0, 0);
-    let mut a = template.clone();
-    for k in 0..120 {
-        let r = model.random_configuration(&mut rng).into_vec();
-        let mut b = template.clone();
-        for &d in &arm {
-            a[d] = r[d];
-            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
-        }
-        if !checker.is_config_free(&a) {
-            continue;
-        }
-        let sampled = common::sampled_collision(&checker, &a, &b, 2000);
-        let found = checker.check_motion(&a, &b, 1e-4).contact.is_some();
-        assert_eq!(
-            found, sampled,
-            "motion {k}: dense sampling finds a collision: {sampled}"
-        );
-        if sampled {
-            hit += 1;
-        } else {
-            free += 1;
-        }
-    }
+    let (hit, free) = common::motions_agree_with_sampling(
+        &model,
+        (&checker, &[&checker]),
+        (&template, &arm),
+        (3, 120, 2000),
+    );
     assert!(hit > 5 && free > 5, "{hit} colliding, {free} free");
 }
 
