@@ -45,6 +45,41 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
+/// `htngtp plan` of a library problem (`domain`, `problem`: file stems in domains/library) in
+/// the shipped scene `scene`, its plan JSON written to `json`, with `more` arguments.
+fn plan_library(domain: &str, problem: &str, scene: &str, json: &Path, more: &[&str]) -> Output {
+    let lib = root().join("domains/library");
+    let file = |name: &str| lib.join(name).to_str().unwrap().to_string();
+    let (d, p, s) = (
+        file(&format!("{domain}.hddl")),
+        file(&format!("{problem}.hddl")),
+        file(scene),
+    );
+    let mut args = vec![
+        "plan",
+        &d,
+        &p,
+        "--scene",
+        &s,
+        "--json-out",
+        json.to_str().unwrap(),
+    ];
+    args.extend_from_slice(more);
+    run(&args)
+}
+
+/// `htngtp check` finds the plan JSON `json` clean.
+fn assert_clean(json: &Path) {
+    let o = run(&["check", json.to_str().unwrap()]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 #[test]
 #[ignore = "needs ../shared/robots beside the checkout; .ci/run runs it when present"]
 fn facts_read_the_real_pr2() {
@@ -85,18 +120,8 @@ fn the_plan_json_carries_the_convex_pieces_checked() {
     // and `htngtp check` finds the plan clean, the turning fingers closed on what they hold.
     let dir = scratch("json");
     let json = dir.join("plan.json");
-    let lib = root().join("domains/library");
-    let o = run(&[
-        "plan",
-        lib.join("domain.hddl").to_str().unwrap(),
-        lib.join("fig4.hddl").to_str().unwrap(),
-        "--scene",
-        lib.join("scene-real-pr2.toml").to_str().unwrap(),
-        "--json-out",
-        json.to_str().unwrap(),
-        "--time-limit",
-        "60",
-    ]);
+    let more = ["--time-limit", "60"];
+    let o = plan_library("domain", "fig4", "scene-real-pr2.toml", &json, &more);
     assert_eq!(
         o.status.code(),
         Some(0),
@@ -130,14 +155,7 @@ fn the_plan_json_carries_the_convex_pieces_checked() {
         .filter(|s| s["gtp"].is_object())
         .count();
     assert!(geometric >= 4, "{geometric} geometric steps");
-    let o = run(&["check", json.to_str().unwrap()]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_clean(&json);
 }
 
 #[test]
@@ -301,31 +319,16 @@ fn the_real_pr2_puts_the_pos_machine_away_where_the_member_cannot_see_it() {
     // do (the symbolic strategy stopped at its cap when they circled the machine held).
     let dir = scratch("put-away");
     let plan = dir.join("plan.json");
-    let library = root().join("domains/library");
-    let o = run(&[
-        "plan",
-        library.join("domain.hddl").to_str().unwrap(),
-        library.join("pos-out-of-reach.hddl").to_str().unwrap(),
-        "--scene",
-        library
-            .join("scene-far-pos-real-pr2.toml")
-            .to_str()
-            .unwrap(),
-        "--strategy",
-        "symbolic",
-        "--seed",
-        "1",
-        "--json-out",
-        plan.to_str().unwrap(),
-    ]);
+    let more = ["--strategy", "symbolic", "--seed", "1"];
+    let o = plan_library(
+        "domain",
+        "pos-out-of-reach",
+        "scene-far-pos-real-pr2.toml",
+        &plan,
+        &more,
+    );
     let out = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{out}");
     assert!(out.contains("putaway pos-machine member"), "{out}");
-    let o = run(&["check", plan.to_str().unwrap()]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stdout)
-    );
+    assert_clean(&plan);
 }
