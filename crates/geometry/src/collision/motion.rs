@@ -163,7 +163,9 @@ enum Measure {
     Hit(Hit),
 }
 
-/// GJK stops within this fraction of the distance (parry's relative tolerance, with margin).
+/// [`support_gap`] stops once its best gap is within this fraction of GJK's upper bound; a
+/// distance of parry's (shapes without a support function) is discounted by it (its relative
+/// tolerance, with margin).
 const GJK_RELATIVE: f32 = 0.005;
 
 /// A pair due within this much of the motion's parameter is measured with the pairs due now.
