@@ -43,6 +43,7 @@ use crate::agent::{AgentModel, ModelError};
 
 mod climbing_hull;
 mod motion;
+mod pair_cells;
 mod self_collision;
 pub use motion::MotionCheck;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
@@ -790,7 +791,7 @@ impl CollisionChecker {
                 for g in groups {
                     let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
                     let d = centres[g.a as usize] - centres[g.b as usize];
-                    if d.length_squared() > (ra + rb) * (ra + rb) {
+                    if d.length_squared() > (ra + rb) * (ra + rb) || self.agent.proven_apart(g, q) {
                         continue;
                     }
                     for &(a, b) in &pairs[g.start as usize..g.end as usize] {

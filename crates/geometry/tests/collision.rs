@@ -596,3 +596,35 @@ fn base_motion_checks_find_what_dense_sampling_finds() {
         "{c:?}"
     );
 }
+
+/// Pair cells (links whose relative pose depends on two joints, such as the upper arm and the
+/// forearm two joints down) never free a configuration or a motion that collides: checked
+/// against the same checker without them, over random configurations and motions of the right
+/// arm (see `common::pair_cells_are_sound`).
+#[test]
+fn pair_cells_never_free_a_collision() {
+    let with = self_model("pr2.urdf");
+    let model = with.model().clone();
+    let options = SelfCollisionOptions {
+        pair_cells: false,
+        ..SelfCollisionOptions::default()
+    };
+    let without = Arc::new(SelfCollisionModel::new(model.clone(), &options));
+    assert!(without.pairs_with_cells().is_empty());
+    let pairs = with.pairs_with_cells();
+    assert!(
+        pairs.contains(&("r_upper_arm_link", "r_forearm_link")),
+        "{pairs:?}"
+    );
+    let checker = |m: &Arc<SelfCollisionModel>| {
+        CollisionChecker::new(m.clone(), common::table_and_slab(), Pose::IDENTITY)
+    };
+    let template = model.default_configuration().into_vec();
+    let dofs = model.chain("right_arm").unwrap().dofs;
+    common::pair_cells_are_sound(
+        &model,
+        (&checker(&with), &checker(&without)),
+        (&template, &dofs),
+        (3, 2000),
+    );
+}

@@ -216,7 +216,7 @@ impl CollisionChecker {
                 // Joints outside the cache's move too: every shape and pair may.
                 (moving, groups) = (&self.agent.all_shapes, &self.agent.groups);
             }
-            let items = self.motion_items(&speed, moving, groups, &mut s);
+            let items = self.motion_items((&speed, (a, b)), moving, groups, &mut s);
             let mut q = a.to_vec();
             let pose_at = |t: f32, s: &mut Scratch| {
                 for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(b)) {
@@ -357,13 +357,14 @@ impl CollisionChecker {
         }
     }
 
-    /// Every pair that may come together during the motion (posed at its start in `s`), due
-    /// at once: the moving shapes against the obstacles within their reach, the checked
-    /// pairs of links of which one moves, the held objects against the obstacles, the agent
+    /// Every pair that may come together during the motion from `a` to `b` (posed at its
+    /// start in `s`, its joints at `speed`), due at once: the moving shapes against the
+    /// obstacles within their reach, the checked pairs of links of which one moves (but those
+    /// their cells prove apart all along), the held objects against the obstacles, the agent
     /// and each other.
     fn motion_items(
         &self,
-        speed: &[f32],
+        (speed, motion): (&[f32], (&[f32], &[f32])),
         moving: &[u16],
         groups: &[PairGroup],
         s: &mut Scratch,
@@ -386,6 +387,9 @@ impl CollisionChecker {
         if self.self_collision {
             let spheres = &self.agent.link_spheres;
             for (g, pg) in groups.iter().enumerate() {
+                if self.agent.proven_apart_along(pg, motion) {
+                    continue;
+                }
                 let (a, b) = (pg.a as usize, pg.b as usize);
                 let (ba, bb) = (
                     (a, spheres[a].0, spheres[a].1),
@@ -583,6 +587,40 @@ fn ball(e: &ShapeEntry, pose: &Pose) -> (Vector, f32) {
     (*pose * e.ball.0, e.ball.1)
 }
 
+/// Whether agent shapes `a` and `b`, their links at `poses`, are proven at least `needed`
+/// apart (GJK stopped as soon as that is settled).
+pub(super) fn proven_apart(
+    (a, b): (&ShapeEntry, &ShapeEntry),
+    poses: &[Pose],
+    needed: f32,
+) -> bool {
+    shapes_gap((a, b), poses, needed, needed) >= needed
+}
+
+/// A proven lower bound on the distance of agent shapes `a` and `b`, their links at `poses`:
+/// their balls' where that is at least `cheap_enough`, else GJK's (by their climbing supports),
+/// stopped once it is known to be above or below `settles`.
+fn shapes_gap(
+    (a, b): (&ShapeEntry, &ShapeEntry),
+    poses: &[Pose],
+    cheap_enough: f32,
+    settles: f32,
+) -> f32 {
+    let (pa, pb) = (poses[a.link] * a.local_pose, poses[b.link] * b.local_pose);
+    let balls = (pa * a.ball.0 - pb * b.ball.0).length() - a.ball.1 - b.ball.1;
+    if balls >= cheap_enough {
+        return balls;
+    }
+    let gap = match (a.support(), b.support()) {
+        (Some(sa), Some(sb)) => {
+            let mut warm = Vector::ZERO;
+            support_gap_until(&pa.inv_mul(&pb), (sa, sb), &mut warm, settles)
+        }
+        _ => lower_bound_distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
+    };
+    gap.max(balls)
+}
+
 /// A held object as a body of the link holding it.
 fn held_body(h: &HeldObject) -> Body {
     (h.link, h.grasp.translation, h.radius)
@@ -628,6 +666,17 @@ fn entry(e: &ShapeEntry) -> (&dyn Shape, Option<&dyn SupportMap>) {
 /// GJK returns its last direction, not its best: for two long hulls a few millimetres apart,
 /// face to face, that one can show a fiftieth of the gap.
 fn support_gap(pos12: &Pose, a: &dyn SupportMap, b: &dyn SupportMap, warm: &mut Vector) -> f32 {
+    support_gap_until(pos12, (a, b), warm, f32::INFINITY)
+}
+
+/// [`support_gap`], stopped as soon as the answer is known to be at least `enough`, or known
+/// to be less (a finite `enough`: whether two shapes are that far apart, not how far).
+fn support_gap_until(
+    pos12: &Pose,
+    (a, b): (&dyn SupportMap, &dyn SupportMap),
+    warm: &mut Vector,
+    enough: f32,
+) -> f32 {
     let start = match warm.try_normalize() {
         Some(d) => d,
         None => (-pos12.translation).try_normalize().unwrap_or(Vector::X),
@@ -648,7 +697,9 @@ fn support_gap(pos12: &Pose, a: &dyn SupportMap, b: &dyn SupportMap, warm: &mut 
         if lower > best.0 {
             best = (lower, dir);
         }
-        if upper - best.0 <= GJK_RELATIVE * upper {
+        if upper - best.0 <= GJK_RELATIVE * upper
+            || (enough.is_finite() && (best.0 >= enough || upper < enough))
+        {
             break;
         }
         if !simplex.add_point(cso) {

@@ -12,6 +12,7 @@ use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
 use super::intersects;
 use super::motion::{JointReach, body, lower_bound_distance};
+use super::pair_cells::{CellProver, PairCells};
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -24,6 +25,10 @@ pub struct SelfCollisionOptions {
     /// A pair colliding in at least this fraction of the samples is ignored (MoveIt's default
     /// is 0.95).
     pub always_fraction: f32,
+    /// Whether pairs of links whose relative pose depends on two degrees of freedom skip
+    /// their exact tests where cells of those two prove them apart (see `pair_cells.rs`).
+    /// Answers change only where the exact test calls shapes a hair apart touching.
+    pub pair_cells: bool,
 }
 
 impl Default for SelfCollisionOptions {
@@ -32,6 +37,7 @@ impl Default for SelfCollisionOptions {
             samples: 1000,
             seed: 0,
             always_fraction: 0.95,
+            pair_cells: true,
         }
     }
 }
@@ -236,7 +242,13 @@ pub(super) struct PairGroup {
     pub(super) b: u16,
     pub(super) start: u32,
     pub(super) end: u32,
+    /// For links whose relative pose depends on two degrees of freedom, an index into
+    /// [`SelfCollisionModel`]'s cells of them ([`NO_CELLS`]: none).
+    pub(super) cells: u32,
 }
+
+/// [`PairGroup::cells`] of a pair without cells.
+pub(super) const NO_CELLS: u32 = u32::MAX;
 
 /// An agent model's collision shapes and its self-collision pair list. Build once per model.
 #[derive(Clone)]
@@ -254,6 +266,9 @@ pub struct SelfCollisionModel {
     pub(super) all_shapes: Vec<u16>,
     /// How fast each link's points may move with the joints (for motion checks).
     pub(super) reach: JointReach,
+    /// The cells of the link pairs whose relative pose depends on two degrees of freedom,
+    /// proven free as checks come to them (shared by the model's clones).
+    cells: Arc<Vec<PairCells>>,
     allowed: Vec<AllowedPair>,
 }
 
@@ -366,6 +381,7 @@ impl SelfCollisionModel {
         }
         let mut pairs = Vec::new();
         let mut groups = Vec::new();
+        let mut cells = Vec::new();
         for a in 0..nl {
             for b in a + 1..nl {
                 if by_link[a].is_empty() || by_link[b].is_empty() || status[key(a, b)].is_some() {
@@ -375,12 +391,26 @@ impl SelfCollisionModel {
                 for &i in &by_link[a] {
                     pairs.extend(by_link[b].iter().map(|&j| (i as u16, j as u16)));
                 }
-                groups.push(PairGroup {
+                let mut group = PairGroup {
                     a: a as u16,
                     b: b as u16,
                     start,
                     end: pairs.len() as u32,
-                });
+                    cells: NO_CELLS,
+                };
+                let prover = CellProver {
+                    model: &model,
+                    shapes: &shapes,
+                    reach: &reach,
+                };
+                if options.pair_cells
+                    && let &[d, e] = relative_dofs(&model, a, b).as_slice()
+                    && let Some(c) = prover.cells([d, e], &pairs[start as usize..])
+                {
+                    group.cells = cells.len() as u32;
+                    cells.push(c);
+                }
+                groups.push(group);
             }
         }
         let link_spheres = by_link
@@ -419,6 +449,7 @@ impl SelfCollisionModel {
         }
         SelfCollisionModel {
             reach,
+            cells: Arc::new(cells),
             model,
             all_shapes: (0..shapes.len() as u16).collect(),
             shapes,
@@ -429,6 +460,40 @@ impl SelfCollisionModel {
         }
     }
 
+    /// Whether the links of `group` are proven apart in configuration `q` by their cells
+    /// (see `pair_cells.rs`); false for a pair without cells.
+    pub(super) fn proven_apart(&self, group: &PairGroup, q: &[f32]) -> bool {
+        self.with_cells(group, |prover, cells, pairs| prover.free(cells, pairs, q))
+    }
+
+    /// Whether the links of `group` are proven apart all along the straight motion from `a`
+    /// to `b` by their cells; false for a pair without cells.
+    pub(super) fn proven_apart_along(&self, group: &PairGroup, (a, b): (&[f32], &[f32])) -> bool {
+        self.with_cells(group, |prover, cells, pairs| {
+            prover.free_along(cells, pairs, (a, b))
+        })
+    }
+
+    fn with_cells(
+        &self,
+        group: &PairGroup,
+        proof: impl FnOnce(&CellProver, &PairCells, &[(u16, u16)]) -> bool,
+    ) -> bool {
+        let Some(cells) = self.cells.get(group.cells as usize) else {
+            return false;
+        };
+        let prover = CellProver {
+            model: &self.model,
+            shapes: &self.shapes,
+            reach: &self.reach,
+        };
+        proof(
+            &prover,
+            cells,
+            &self.pairs[group.start as usize..group.end as usize],
+        )
+    }
+
     /// The agent model.
     pub fn model(&self) -> &Arc<AgentModel> {
         &self.model
@@ -437,6 +502,17 @@ impl SelfCollisionModel {
     /// Link pairs left out of self-collision checks, and why.
     pub fn allowed_pairs(&self) -> &[AllowedPair] {
         &self.allowed
+    }
+
+    /// The pairs of links (names) whose tests go through cells of their two degrees of
+    /// freedom ([`SelfCollisionOptions::pair_cells`]).
+    pub fn pairs_with_cells(&self) -> Vec<(&str, &str)> {
+        let name = |l: u16| self.model.links()[l as usize].name.as_str();
+        self.groups
+            .iter()
+            .filter(|g| g.cells != NO_CELLS)
+            .map(|g| (name(g.a), name(g.b)))
+            .collect()
     }
 
     /// Number of shape pairs tested for self-collision.

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use geometry::agent::AgentModel;
-use geometry::collision::{CollisionChecker, Obstacle, StaticObstacles};
+use geometry::collision::{CollisionChecker, Contact, Obstacle, StaticObstacles};
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
 
@@ -93,4 +93,103 @@ pub fn motions_agree_with_sampling(
         }
     }
     (hit, free)
+}
+
+/// The least exact distance (parry's) between the shapes of links `a` and `b` of `model` in
+/// configuration `q`.
+pub fn link_distance(model: &AgentModel, q: &[f32], (a, b): (&str, &str)) -> f32 {
+    let (a, b) = (model.link_id(a).unwrap(), model.link_id(b).unwrap());
+    let shapes = model.posed_shapes(Pose::IDENTITY, q);
+    let mut best = f32::INFINITY;
+    for (_, ca, pa) in shapes.iter().filter(|s| s.0 == a) {
+        for (_, cb, pb) in shapes.iter().filter(|s| s.0 == b) {
+            let d = parry3d::query::distance(pa, &*ca.shape.0, pb, &*cb.shape.0).unwrap();
+            best = best.min(d.distance);
+        }
+    }
+    best
+}
+
+/// Whether every collision `without` finds at `q` is a pair of links in `cell_pairs` that
+/// parry's exact distance puts apart: what a checker with pair cells may call free.
+fn only_hairs_apart(
+    model: &AgentModel,
+    without: &CollisionChecker,
+    q: &[f32],
+    cell_pairs: &[(String, String)],
+) -> bool {
+    without.collisions(q).iter().all(|c| match c {
+        Contact::SelfCollision { link_a, link_b } => {
+            let pair = (link_a.clone(), link_b.clone());
+            let flipped = (link_b.clone(), link_a.clone());
+            (cell_pairs.contains(&pair) || cell_pairs.contains(&flipped))
+                && link_distance(model, q, (link_a, link_b)) > 0.0
+        }
+        _ => false,
+    })
+}
+
+/// Pair cells never free what collides: `configs` random configurations and as many random
+/// straight motions of the joints `dofs` from `template` (`seed` seeds them), checked by
+/// `with` (pair cells on) and `without` (off). Where `with` finds free what `without` does
+/// not, every collision `without` finds must be a pair of links with cells that parry's exact
+/// distance puts apart; never the other way round. A motion `with` certifies free must be so
+/// at 200 configurations along it in the same sense. Returns the configurations and motions
+/// the two called differently (the exact test's hairs).
+pub fn pair_cells_are_sound(
+    model: &AgentModel,
+    (with, without): (&CollisionChecker, &CollisionChecker),
+    (template, dofs): (&[f32], &[usize]),
+    (seed, configs): (u64, usize),
+) -> usize {
+    let cell_pairs: Vec<(String, String)> = with
+        .self_collision_model()
+        .pairs_with_cells()
+        .iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect();
+    assert!(!cell_pairs.is_empty(), "no pair of links has cells");
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut differ = 0;
+    let mut a = template.to_vec();
+    for k in 0..configs {
+        let r = model.random_configuration(&mut rng).into_vec();
+        let mut b = template.to_vec();
+        for &d in dofs {
+            a[d] = r[d];
+            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
+        }
+        let (free_with, free_without) = (with.is_config_free(&a), without.is_config_free(&a));
+        assert!(
+            free_with || !free_without,
+            "configuration {k}: cells add a collision"
+        );
+        if free_with != free_without {
+            differ += 1;
+            assert!(
+                only_hairs_apart(model, without, &a, &cell_pairs),
+                "configuration {k}: cells free a collision: {:?}",
+                without.collisions(&a)
+            );
+        }
+        if !free_with || with.check_motion(&a, &b, 1e-4).contact.is_some() {
+            continue;
+        }
+        let mut q = a.clone();
+        for s in 1..=200 {
+            let t = s as f32 / 200.0;
+            for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(&b)) {
+                *v = x + t * (y - x);
+            }
+            if !without.is_config_free(&q) {
+                differ += 1;
+                assert!(
+                    only_hairs_apart(model, without, &q, &cell_pairs),
+                    "motion {k} at {t}: cells free a collision: {:?}",
+                    without.collisions(&q)
+                );
+            }
+        }
+    }
+    differ
 }
