@@ -296,28 +296,29 @@ pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptio
                         "orientations": s.stats.orientations,
                         "planner_calls": s.stats.planner_calls,
                     })),
-                    "trajectories": trajectories,
                 });
+                // Moved in, not copied by `json!`: the frames are most of a plan.
+                gtp["trajectories"] = Value::Array(trajectories);
             }
-            steps.push(json!({
+            let mut step = json!({
                 "index": i, "id": a.id, "action": a.name, "args": a.args,
-                "added": added, "deleted": deleted, "gtp": gtp,
+                "added": added, "deleted": deleted,
                 "object_poses": moved.clone(),
-            }));
+            });
+            step["gtp"] = gtp;
+            steps.push(step);
         }
     }
-    json!({
+    let mut plan = json!({
         "format": "htngtp-plan",
         "version": 1,
         "domain": domain,
         "problem": problem,
         "status": status,
         "message": message,
-        "scene": scene_json(&run.initial),
         "initial_literals": run.oracle.initial_literals().iter().map(atom_json).collect::<Vec<_>>(),
         "tree": tree,
         "root": root,
-        "steps": steps,
         "stats": {
             "nodes": run.result.stats.nodes,
             "htn_backtracks": run.result.stats.htn_backtracks,
@@ -327,7 +328,10 @@ pub fn plan_json_with(run: &Run, domain: &str, problem: &str, opts: &TimingOptio
             "time_ms": run.result.stats.time_s * 1e3,
             "gtp_tasks": run.oracle.task_stats(),
         },
-    })
+    });
+    plan["scene"] = scene_json(&run.initial);
+    plan["steps"] = Value::Array(steps);
+    plan
 }
 
 fn atom_json(a: &htn::oracle::GroundAtom) -> Value {

@@ -261,11 +261,12 @@ pub fn trajectory_json(
             tracker.set(&t.agent, joint, v);
         }
     }
-    let value = json!({
+    // The frames and points are moved in, not copied: `json!` would copy them.
+    let mut value = json!({
         "agent": t.agent,
         "label": t.phase,
         "holding": holding,
-        "frames": frames,
+        "frames": null,
         "joint_trajectory": {
             "agent": t.agent,
             "group": t.arm,
@@ -275,9 +276,11 @@ pub fn trajectory_json(
             "velocity_limits": velocity,
             "acceleration_limits": acceleration,
             "waypoints": waypoints,
-            "points": json_points,
+            "points": null,
         },
     });
+    value["frames"] = Value::Array(frames);
+    value["joint_trajectory"]["points"] = Value::Array(json_points);
     (value, world)
 }
 
