@@ -613,8 +613,11 @@ fn shapes_gap(
     }
     let gap = match (a.support(), b.support()) {
         (Some(sa), Some(sb)) => {
-            let mut warm = Vector::ZERO;
-            support_gap_until(&pa.inv_mul(&pb), (sa, sb), &mut warm, settles)
+            // From the line between the balls' centres (in `a`'s frame), not between the
+            // frames' origins: a mesh piece's frame is its link's.
+            let pos12 = pa.inv_mul(&pb);
+            let mut start = a.ball.0 - pos12 * b.ball.0;
+            support_gap_until(&pos12, (sa, sb), &mut start, settles)
         }
         _ => lower_bound_distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
     };
