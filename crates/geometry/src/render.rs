@@ -349,6 +349,7 @@ impl VisualBodies {
                 shape,
                 pose: *pose,
                 colour: *colour,
+                radius: None,
             })
             .collect()
     }

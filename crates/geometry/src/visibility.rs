@@ -235,6 +235,15 @@ fn occluders_in<'w>(
         if b.owner == BodyOwner::Object(target) {
             continue;
         }
+        if let Some(r) = b.radius {
+            let ball = Aabb::new(
+                b.pose.translation - Vector::splat(r),
+                b.pose.translation + Vector::splat(r),
+            );
+            if !ball.intersects(region) {
+                continue; // without visiting a mesh piece's vertices for its exact bounds
+            }
+        }
         let bb = b.shape.compute_aabb(&b.pose);
         if !bb.intersects(region) || b.shape.contains_point(&b.pose, e) {
             continue;

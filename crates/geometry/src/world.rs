@@ -116,6 +116,9 @@ pub struct Body<'a> {
     /// World pose of the shape.
     pub pose: Pose,
     pub colour: [u8; 3],
+    /// The radius of a ball about `pose`'s origin that holds the shape, where it is known
+    /// without visiting the shape (an agent's collision shapes): a cheap first bound.
+    pub radius: Option<f32>,
 }
 
 /// How deep two bodies may interpenetrate in a scene as loaded: a book resting on a desk
@@ -732,6 +735,7 @@ impl World {
                 shape: &self.object(id).shape,
                 pose: self.object_shape_pose(id),
                 colour: self.object(id).colour,
+                radius: None,
             })
             .collect();
         for a in self.agent_ids() {
@@ -744,6 +748,7 @@ impl World {
                         shape: &c.shape,
                         pose: poses[li] * c.local_pose,
                         colour: info.spec.colour,
+                        radius: Some(c.bounding_radius),
                     });
                 }
             }
