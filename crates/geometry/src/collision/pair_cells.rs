@@ -11,10 +11,12 @@
 //! shapes can move relative to each other while the two joints stay in the cell (each joint's
 //! half-width times the shapes' greatest distance from its axis), with [`CELL_MARGIN`] to
 //! spare. A cell's answer depends on the cell alone, so checks answer the same whatever order
-//! they come in; where no cell is proven the pair is tested exactly, as before.
+//! they come in; where no cell is proven the pair is tested exactly, as before. A pair splits
+//! at most [`MAX_SPLITS`] cells (8 MiB), so a run that wanders everywhere keeps its memory:
+//! past that, a cell not proven is not split but tested exactly.
 
 use std::sync::OnceLock;
-use std::sync::atomic::{AtomicU32, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicU32, Ordering};
 
 use parry3d::math::Pose;
 
@@ -37,6 +39,9 @@ const CELL_MARGIN: f32 = 1e-4;
 /// The most of the largest cells along one degree of freedom, and in all.
 const MAX_CELLS_PER_DOF: f32 = 1024.0;
 const MAX_CELLS: u32 = 1 << 16;
+
+/// The most cells one pair splits (each into `SPLIT` x `SPLIT`, 32 bytes a cell): 8 MiB.
+const MAX_SPLITS: u32 = 1 << 16;
 
 /// The most of the largest cells a motion's check looks at (a longer motion is followed by
 /// conservative advancement alone).
@@ -103,6 +108,22 @@ pub(super) struct PairCells {
     /// The shape pair that last failed a proof, tried first in the next (neighbouring cells
     /// fail alike); the order changes how soon a proof fails, not its answer.
     last_failed: AtomicU32,
+    /// Cells split so far, at most [`MAX_SPLITS`]: a long run that wanders everywhere keeps
+    /// its memory bounded (a cell it may not split is tested exactly).
+    splits: AtomicU32,
+}
+
+impl Cell {
+    /// The cells `self` splits into, split now if not yet and `cells` may split more.
+    fn split<'c>(&'c self, cells: &PairCells) -> Option<&'c [Cell]> {
+        if let Some(s) = self.smaller.get() {
+            return Some(s);
+        }
+        if cells.splits.fetch_add(1, Ordering::Relaxed) >= MAX_SPLITS {
+            return None;
+        }
+        Some(self.smaller.get_or_init(|| new_cells(SPLIT * SPLIT)))
+    }
 }
 
 impl PairCells {
@@ -200,6 +221,7 @@ impl CellProver<'_> {
             axes,
             largest: new_cells(n[0] * n[1]),
             last_failed: AtomicU32::new(0),
+            splits: AtomicU32::new(0),
         })
     }
 
@@ -222,7 +244,7 @@ impl CellProver<'_> {
         let (Some(s), Some(t)) = (a.position(q[a.dof]), b.position(q[b.dof])) else {
             return false;
         };
-        let (mut list, mut scale) = (&cells.largest, 1u32);
+        let (mut list, mut scale): (&[Cell], u32) = (&cells.largest, 1);
         for level in 0..LEVELS {
             let at = ((s * scale as f32) as i64, (t * scale as f32) as i64);
             let cell = &list[cells.sibling(at, level)];
@@ -231,8 +253,10 @@ impl CellProver<'_> {
                 _ if level + 1 == LEVELS => return false,
                 _ => {}
             }
-            list = cell.smaller.get_or_init(|| new_cells(SPLIT * SPLIT));
-            scale *= SPLIT;
+            let Some(smaller) = cell.split(cells) else {
+                return false;
+            };
+            (list, scale) = (smaller, scale * SPLIT);
         }
         false
     }
@@ -305,7 +329,9 @@ impl CellProver<'_> {
             _ if level + 1 == LEVELS => return false,
             _ => {}
         }
-        let smaller = cell.smaller.get_or_init(|| new_cells(SPLIT * SPLIT));
+        let Some(smaller) = cell.split(cells) else {
+            return false;
+        };
         let split = SPLIT as i64;
         (0..split).all(|di| {
             (0..split).all(|dj| {

@@ -382,6 +382,11 @@ impl SelfCollisionModel {
         let mut pairs = Vec::new();
         let mut groups = Vec::new();
         let mut cells = Vec::new();
+        let prover = CellProver {
+            model: &model,
+            shapes: &shapes,
+            reach: &reach,
+        };
         for a in 0..nl {
             for b in a + 1..nl {
                 if by_link[a].is_empty() || by_link[b].is_empty() || status[key(a, b)].is_some() {
@@ -397,11 +402,6 @@ impl SelfCollisionModel {
                     start,
                     end: pairs.len() as u32,
                     cells: NO_CELLS,
-                };
-                let prover = CellProver {
-                    model: &model,
-                    shapes: &shapes,
-                    reach: &reach,
                 };
                 if options.pair_cells
                     && let &[d, e] = relative_dofs(&model, a, b).as_slice()
