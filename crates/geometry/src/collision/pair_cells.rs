@@ -119,7 +119,10 @@ impl Cell {
         if let Some(s) = self.smaller.get() {
             return Some(s);
         }
-        if cells.splits.fetch_add(1, Ordering::Relaxed) >= MAX_SPLITS {
+        // Loaded first, so that the count stops near the cap instead of wrapping around.
+        if cells.splits.load(Ordering::Relaxed) >= MAX_SPLITS
+            || cells.splits.fetch_add(1, Ordering::Relaxed) >= MAX_SPLITS
+        {
             return None;
         }
         Some(self.smaller.get_or_init(|| new_cells(SPLIT * SPLIT)))
