@@ -600,7 +600,7 @@ fn base_motion_checks_find_what_dense_sampling_finds() {
 /// Pair cells (links whose relative pose depends on two joints, such as the upper arm and the
 /// forearm two joints down) never free a configuration or a motion that collides: checked
 /// against the same checker without them, over random configurations and motions of the right
-/// arm (see `common::pair_cells_are_sound`).
+/// arm and the torso's lift (see `common::pair_cells_are_sound`).
 #[test]
 fn pair_cells_never_free_a_collision() {
     let with = self_model("pr2.urdf");
@@ -620,7 +620,9 @@ fn pair_cells_never_free_a_collision() {
         CollisionChecker::new(m.clone(), common::table_and_slab(), Pose::IDENTITY)
     };
     let template = model.default_configuration().into_vec();
-    let dofs = model.chain("right_arm").unwrap().dofs;
+    // The right arm and the torso's lift (a prismatic joint under the shoulders).
+    let mut dofs = model.chain("right_arm").unwrap().dofs;
+    dofs.push(model.dof_index("torso_lift_joint").unwrap());
     common::pair_cells_are_sound(
         &model,
         (&checker(&with), &checker(&without)),
