@@ -56,7 +56,8 @@ fn mutated_inputs_never_panic_hang_or_exhaust_memory_in_process() {
         &fuzz_support::Options {
             seed: 13,
             per_kind,
-            out_dir: std::env::temp_dir().join(format!("htngtp-fuzz-{}", std::process::id())),
+            out_dir: std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+                .join(format!("htngtp-fuzz-{}", std::process::id())),
             progress: 0,
         },
     );
@@ -175,7 +176,8 @@ fn time_limit(args: &[String]) -> Option<f64> {
 fn a_sample_of_mutated_inputs_through_the_binary_exits_cleanly() {
     let exe = env!("CARGO_BIN_EXE_htngtp");
     let seeds = fuzz_support::corpus(shared_present(), 24 * 1024);
-    let dir = std::env::temp_dir().join(format!("htngtp-fuzz-bin-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-fuzz-bin-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut rng = fastrand::Rng::with_seed(7);
     let mut runs = 0;

@@ -113,7 +113,8 @@ fn faults_of(h: &hostile_support::Hostile, dir: &Path, limits: Limits) -> Vec<St
 }
 
 fn scratch(what: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("htngtp-{what}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-{what}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

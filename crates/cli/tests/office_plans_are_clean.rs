@@ -37,7 +37,8 @@ const PROBLEMS: [(&str, &str); 10] = [
 const STRATEGIES: [&str; 3] = ["symbolic", "chronological", "geometric-first"];
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("htngtp-office-{name}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-office-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
 }

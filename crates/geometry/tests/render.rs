@@ -58,7 +58,8 @@ fn top_view_and_png_round_trip() {
     let img = render(&w, &cam, 64, 64);
     let red = BodyOwner::Object(w.object_id("red").unwrap());
     assert!(img.count(red) > 20);
-    let path = std::env::temp_dir().join(format!("htngtp-render-{}.png", std::process::id()));
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-render-{}.png", std::process::id()));
     img.save_png(&path).unwrap();
     let back = image::open(&path).unwrap().to_rgb8();
     assert_eq!(back.dimensions(), (64, 64));
@@ -128,7 +129,8 @@ fn box_stl(h: [f32; 3]) -> String {
 /// A one-link robot whose collision is a 0.1 m box and whose visual is `visual` (a mesh file
 /// name), in a scene of its own; the world and the link's owner.
 fn one_link_robot(dir: &str, visual: &str) -> (World, BodyOwner) {
-    let root = std::env::temp_dir().join(format!("htngtp-visual-{dir}-{}", std::process::id()));
+    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-visual-{dir}-{}", std::process::id()));
     std::fs::create_dir_all(&root).unwrap();
     std::fs::write(root.join("big.stl"), box_stl([0.2, 0.2, 0.2])).unwrap();
     std::fs::write(root.join("bad.stl"), b"solid x\nfacet normal 0 0 1\n").unwrap();

@@ -285,7 +285,8 @@ fn mutated_hddl_never_panics_and_errors_point_into_the_text() {
             }
         };
         if let Some(why) = failure {
-            let dump = std::env::temp_dir().join(format!("htn-fuzz-failure-{seed}-{i}.hddl"));
+            let dump = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+                .join(format!("htn-fuzz-failure-{seed}-{i}.hddl"));
             let _ = std::fs::write(&dump, &bytes);
             panic!(
                 "iteration {i} (HTN_FUZZ_SEED={seed}): {why}; input written to {}",

@@ -372,7 +372,8 @@ fn empty_text_and_files_that_are_not_utf8_or_missing() {
         "d.hddl:1:1: empty file: expected `(define (domain NAME) ...)`"
     );
 
-    let dir = std::env::temp_dir().join(format!("htn-parse-features-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htn-parse-features-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("latin1.hddl");
     std::fs::write(&bad, b"(define (domain d)\n  (:predicates (caf\xe9)))").unwrap();
