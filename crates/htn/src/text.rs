@@ -1,8 +1,9 @@
 //! Messages that stay readable whatever the input: over-long words are cut, and so is the
 //! message as a whole.
 
-/// The longest word (name, token) a message shows whole, in characters.
-pub const MAX_WORD: usize = 80;
+/// The longest word (name, token, file path) a message shows whole, in characters: a mesh
+/// file deep in a ROS workspace is named whole, a hostile file's 300 KB token is not.
+pub const MAX_WORD: usize = 256;
 /// The longest message shown whole, in characters.
 pub const MAX_MESSAGE: usize = 2000;
 
@@ -15,7 +16,7 @@ pub fn cut(text: &str, max: usize) -> String {
 }
 
 /// `message` with every word longer than [`MAX_WORD`] characters cut (a 300 KB token from a
-/// hostile file shows as its first 80 characters and `…`), newlines turned to spaces (a message
+/// hostile file shows as its first 256 characters and `…`), newlines turned to spaces (a message
 /// is one line), and the whole cut at [`MAX_MESSAGE`] characters.
 pub fn clip(message: &str) -> String {
     let fits = message.len() <= MAX_WORD
@@ -43,7 +44,11 @@ mod tests {
         let m = clip(&format!("task `{long}` is not declared"));
         assert!(m.starts_with("task `xxx"), "{m}");
         assert!(m.ends_with("… is not declared"), "{m}");
-        assert!(m.chars().count() < 120, "{m}");
+        assert!(m.chars().count() < MAX_WORD + 40, "{m}");
+        // A file path deep in a workspace is shown whole.
+        let path = format!("/home/user/{}/meshes/gone.stl", "catkin_ws/src".repeat(12));
+        let m = clip(&format!("file `{path}` not found"));
+        assert!(m.contains(&path) && path.len() > 150, "{m}");
         let many = "word ".repeat(10_000);
         assert!(clip(&many).chars().count() <= MAX_MESSAGE + 1);
         assert_eq!(clip("a\nb"), "a b");
