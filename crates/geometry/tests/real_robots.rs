@@ -25,6 +25,34 @@ fn load(urdf: &str, modes: &[(&str, ConvexMode)]) -> AgentModel {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The real PR2 with the meshes decomposed as the library scenes have them (the right upper
+/// arm and forearm, the torso lift link).
+fn real_pr2_as_in_the_library() -> AgentModel {
+    let decompose = ["r_upper_arm_link", "r_forearm_link", "torso_lift_link"];
+    let modes: Vec<(&str, ConvexMode)> = decompose
+        .iter()
+        .map(|l| (*l, ConvexMode::Decompose))
+        .collect();
+    load("pr2_description/urdf/robot.xml", &modes)
+}
+
+/// The degrees of freedom of the PR2's right arm (its SRDF's chain; the test models carry no
+/// SRDF).
+fn right_arm(model: &AgentModel) -> Vec<usize> {
+    [
+        "r_shoulder_pan_joint",
+        "r_shoulder_lift_joint",
+        "r_upper_arm_roll_joint",
+        "r_elbow_flex_joint",
+        "r_forearm_roll_joint",
+        "r_wrist_flex_joint",
+        "r_wrist_roll_joint",
+    ]
+    .iter()
+    .map(|j| model.dof_index(j).unwrap())
+    .collect()
+}
+
 fn convex_pieces(model: &AgentModel) -> usize {
     model
         .links()
@@ -189,27 +217,11 @@ fn motion_checks_on_the_real_pr2_find_what_dense_sampling_finds() {
     use parry3d::math::Pose;
     use std::sync::Arc;
 
-    let decompose = ["r_upper_arm_link", "r_forearm_link", "torso_lift_link"];
-    let modes: Vec<(&str, ConvexMode)> = decompose
-        .iter()
-        .map(|l| (*l, ConvexMode::Decompose))
-        .collect();
-    let model = Arc::new(load("pr2_description/urdf/robot.xml", &modes));
+    let model = Arc::new(real_pr2_as_in_the_library());
     let options = SelfCollisionOptions::default();
     let self_model = Arc::new(SelfCollisionModel::new(model.clone(), &options));
     let mut checker = CollisionChecker::new(self_model, common::table_and_slab(), Pose::IDENTITY);
-    let arm: Vec<usize> = [
-        "r_shoulder_pan_joint",
-        "r_shoulder_lift_joint",
-        "r_upper_arm_roll_joint",
-        "r_elbow_flex_joint",
-        "r_forearm_roll_joint",
-        "r_wrist_flex_joint",
-        "r_wrist_roll_joint",
-    ]
-    .iter()
-    .map(|j| model.dof_index(j).unwrap())
-    .collect();
+    let arm = right_arm(&model);
     let template = model.default_configuration().into_vec();
     checker.set_fixed_joints(&template, &arm);
     let (hit, free) = common::motions_agree_with_sampling(
@@ -259,12 +271,7 @@ fn pair_cells_never_free_a_collision_of_the_real_pr2() {
     use parry3d::math::Pose;
     use std::sync::Arc;
 
-    let decompose = ["r_upper_arm_link", "r_forearm_link", "torso_lift_link"];
-    let modes: Vec<(&str, ConvexMode)> = decompose
-        .iter()
-        .map(|l| (*l, ConvexMode::Decompose))
-        .collect();
-    let model = Arc::new(load("pr2_description/urdf/robot.xml", &modes));
+    let model = Arc::new(real_pr2_as_in_the_library());
     let checker = |pair_cells: bool| {
         let options = SelfCollisionOptions {
             pair_cells,
@@ -279,18 +286,7 @@ fn pair_cells_never_free_a_collision_of_the_real_pr2() {
         pairs.contains(&("r_upper_arm_link", "r_forearm_roll_link")),
         "{pairs:?}"
     );
-    let arm: Vec<usize> = [
-        "r_shoulder_pan_joint",
-        "r_shoulder_lift_joint",
-        "r_upper_arm_roll_joint",
-        "r_elbow_flex_joint",
-        "r_forearm_roll_joint",
-        "r_wrist_flex_joint",
-        "r_wrist_roll_joint",
-    ]
-    .iter()
-    .map(|j| model.dof_index(j).unwrap())
-    .collect();
+    let arm = right_arm(&model);
     let template = model.default_configuration().into_vec();
     common::pair_cells_are_sound(
         &model,

@@ -173,6 +173,13 @@ impl Segment {
     }
 }
 
+/// What a cell says of a pair ([`CellProver::look`]).
+enum Look<'c> {
+    Free,
+    Unproven,
+    Smaller(&'c [Cell]),
+}
+
 /// What a proof needs of the model: its links, shapes and joint reach.
 pub(super) struct CellProver<'a> {
     pub(super) model: &'a AgentModel,
@@ -247,19 +254,15 @@ impl CellProver<'_> {
         let (Some(s), Some(t)) = (a.position(q[a.dof]), b.position(q[b.dof])) else {
             return false;
         };
-        let (mut list, mut scale): (&[Cell], u32) = (&cells.largest, 1);
+        let mut list: &[Cell] = &cells.largest;
         for level in 0..LEVELS {
-            let at = ((s * scale as f32) as i64, (t * scale as f32) as i64);
-            let cell = &list[cells.sibling(at, level)];
-            match self.state(cells, cell, at, scale, pairs) {
-                FREE => return true,
-                _ if level + 1 == LEVELS => return false,
-                _ => {}
+            let scale = SPLIT.pow(level) as f32;
+            let at = ((s * scale) as i64, (t * scale) as i64);
+            match self.look(cells, &list[cells.sibling(at, level)], (at, level), pairs) {
+                Look::Free => return true,
+                Look::Unproven => return false,
+                Look::Smaller(smaller) => list = smaller,
             }
-            let Some(smaller) = cell.split(cells) else {
-                return false;
-            };
-            (list, scale) = (smaller, scale * SPLIT);
         }
         false
     }
@@ -326,16 +329,12 @@ impl CellProver<'_> {
         (at, level): ((i64, i64), u32),
         segment: &Segment,
     ) -> bool {
-        let scale = SPLIT.pow(level);
-        match self.state(cells, cell, at, scale, pairs) {
-            FREE => return true,
-            _ if level + 1 == LEVELS => return false,
-            _ => {}
-        }
-        let Some(smaller) = cell.split(cells) else {
-            return false;
+        let smaller = match self.look(cells, cell, (at, level), pairs) {
+            Look::Free => return true,
+            Look::Unproven => return false,
+            Look::Smaller(smaller) => smaller,
         };
-        let split = SPLIT as i64;
+        let (split, scale) = (SPLIT as i64, SPLIT.pow(level));
         (0..split).all(|di| {
             (0..split).all(|dj| {
                 let child = (at.0 * split + di, at.1 * split + dj);
@@ -349,6 +348,22 @@ impl CellProver<'_> {
                     )
             })
         })
+    }
+
+    /// What `cell` (at unwrapped indices `at` of level `level`) says: proven free, not (a
+    /// smallest cell, or one that may not split), or look at its smaller cells.
+    fn look<'c>(
+        &self,
+        cells: &PairCells,
+        cell: &'c Cell,
+        (at, level): ((i64, i64), u32),
+        pairs: &[(u16, u16)],
+    ) -> Look<'c> {
+        match self.state(cells, cell, at, SPLIT.pow(level), pairs) {
+            FREE => Look::Free,
+            _ if level + 1 == LEVELS => Look::Unproven,
+            _ => cell.split(cells).map_or(Look::Unproven, Look::Smaller),
+        }
     }
 
     /// The state of `cell` (at unwrapped indices `at` of the cells `scale` times smaller

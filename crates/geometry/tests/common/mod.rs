@@ -56,6 +56,22 @@ pub fn table_and_slab() -> Arc<StaticObstacles> {
     ]))
 }
 
+/// A random straight motion of the joints `dofs` of `template`: from a random configuration
+/// of them, each moved by up to 0.6 rad; the other joints at `template`'s values.
+pub fn random_motion(
+    model: &AgentModel,
+    (template, dofs): (&[f32], &[usize]),
+    rng: &mut fastrand::Rng,
+) -> (Vec<f32>, Vec<f32>) {
+    let r = model.random_configuration(rng).into_vec();
+    let (mut a, mut b) = (template.to_vec(), template.to_vec());
+    for &d in dofs {
+        a[d] = r[d];
+        b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
+    }
+    (a, b)
+}
+
 /// `motions` random straight motions of the joints `dofs` from `template` (each joint moved
 /// by up to 0.6 rad; `seed` seeds them): where the start is free for `reference`, the motion
 /// check of `checked[k % len]` must find a collision exactly where `steps` evenly spaced
@@ -68,14 +84,8 @@ pub fn motions_agree_with_sampling(
 ) -> (usize, usize) {
     let mut rng = fastrand::Rng::with_seed(seed);
     let (mut hit, mut free) = (0, 0);
-    let mut a = template.to_vec();
     for k in 0..motions {
-        let r = model.random_configuration(&mut rng).into_vec();
-        let mut b = template.to_vec();
-        for &d in dofs {
-            a[d] = r[d];
-            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
-        }
+        let (a, b) = random_motion(model, (template, dofs), &mut rng);
         if !reference.is_config_free(&a) {
             continue;
         }
@@ -154,14 +164,8 @@ pub fn pair_cells_are_sound(
     assert!(!cell_pairs.is_empty(), "no pair of links has cells");
     let mut rng = fastrand::Rng::with_seed(seed);
     let mut differ = 0;
-    let mut a = template.to_vec();
     for k in 0..configs {
-        let r = model.random_configuration(&mut rng).into_vec();
-        let mut b = template.to_vec();
-        for &d in dofs {
-            a[d] = r[d];
-            b[d] = r[d] + (rng.f32() - 0.5) * 1.2;
-        }
+        let (a, b) = random_motion(model, (template, dofs), &mut rng);
         let (free_with, free_without) = (with.is_config_free(&a), without.is_config_free(&a));
         assert!(
             free_with || !free_without,
