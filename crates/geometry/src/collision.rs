@@ -453,41 +453,29 @@ impl CollisionChecker {
                 .or_else(|| joint.mimic.and_then(|m| model.joints()[m.master].dof));
             moving_link[j + 1] = moving_link[joint.parent] || dof.is_some_and(|d| moving_dof[d]);
         }
-        let link_poses = model.link_poses(self.base, template);
         let shapes = &self.agent.shapes;
-        let shape_poses: Vec<Pose> = shapes
-            .iter()
-            .map(|s| link_poses[s.link] * s.local_pose)
-            .collect();
-        let shape_aabbs = shapes
-            .iter()
-            .zip(&shape_poses)
-            .map(|(s, p)| s.aabb(p))
-            .collect();
         let moving = |i: u16| moving_link[shapes[i as usize].link];
-        let moving_shapes = (0..shapes.len() as u16).filter(|&i| moving(i)).collect();
-        let moving_groups = self
+        let (moving_shapes, unmoving_shapes): (Vec<u16>, Vec<u16>) =
+            (0..shapes.len() as u16).partition(|&i| moving(i));
+        let (moving_groups, unmoving_groups): (Vec<_>, Vec<_>) = self
             .agent
             .groups
             .iter()
             .copied()
-            .filter(|g| moving_link[g.a as usize] || moving_link[g.b as usize])
-            .collect();
-        // Collisions of the unmoving part, found once with a full check of the template.
+            .partition(|g| moving_link[g.a as usize] || moving_link[g.b as usize]);
+        // The unmoving part's collisions, found once: its shapes against the obstacles and
+        // each other (not the held objects: they move with the hand).
         let mut static_hits = Vec::new();
-        let held = self.held.take();
-        self.check(template, |h| {
-            let unmoving = match h {
-                Hit::SelfPair(a, b) => !moving(a as u16) && !moving(b as u16),
-                Hit::Obstacle(s, _) => !moving(s as u16),
-                Hit::HeldObstacle(..) | Hit::HeldShape(..) | Hit::HeldPair(..) => false,
-            };
-            if unmoving {
+        let (link_poses, shape_poses, shape_aabbs) = SCRATCH.with(|scratch| {
+            let mut s = scratch.borrow_mut();
+            self.pose_into(template, &mut s);
+            let parts = (&unmoving_shapes[..], &unmoving_groups[..]);
+            self.check_posed(&mut s, template, parts, false, |h| {
                 static_hits.push(h);
-            }
-            false
+                false
+            });
+            (s.links.clone(), s.poses.clone(), s.aabbs.clone())
         });
-        self.held = held;
         self.fixed = Some(Arc::new(FixedJoints {
             template: template.to_vec(),
             moving_dofs: moving_dofs.to_vec(),
@@ -753,103 +741,119 @@ impl CollisionChecker {
                     }
                 }
             }
-            let Scratch {
-                links,
-                poses,
-                aabbs,
-                candidates,
-                centres,
-            } = &mut *guard;
-            let shapes = &self.agent.shapes;
-            // Agent against the scene: first the obstacles near the moving shapes, then per shape.
-            if !self.obstacles.is_empty() && !moving.is_empty() {
-                let mut all = aabbs[moving[0] as usize];
-                for &i in &moving[1..] {
-                    let b = &aabbs[i as usize];
-                    all.mins = all.mins.min(b.mins);
-                    all.maxs = all.maxs.max(b.maxs);
-                }
-                self.obstacles.candidates(&all, candidates);
-                for &i in moving {
-                    let (i, s) = (i as usize, &shapes[i as usize]);
-                    for &o in candidates.iter() {
-                        let o = o as usize;
-                        let obstacle = &self.obstacles.obstacles[o];
-                        if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
-                            && s.hits_by_gjk(&poses[i], &*obstacle.shape.0, &obstacle.pose)
-                            && report(Hit::Obstacle(i, o))
-                        {
-                            return;
-                        }
+            self.check_posed(&mut guard, q, (moving, groups), true, report);
+        });
+    }
+
+    /// The checks of shapes `moving` against the obstacles and of the pairs of links `groups`,
+    /// and where `with_held`, of the held objects, the agent posed at `q` in `s`; `report` is
+    /// called for each collision until it returns true.
+    fn check_posed(
+        &self,
+        s: &mut Scratch,
+        q: &[f32],
+        (moving, groups): (&[u16], &[self_collision::PairGroup]),
+        with_held: bool,
+        mut report: impl FnMut(Hit) -> bool,
+    ) {
+        let Scratch {
+            links,
+            poses,
+            aabbs,
+            candidates,
+            centres,
+        } = s;
+        let shapes = &self.agent.shapes;
+        // Agent against the scene: first the obstacles near the moving shapes, then per shape.
+        if !self.obstacles.is_empty() && !moving.is_empty() {
+            let mut all = aabbs[moving[0] as usize];
+            for &i in &moving[1..] {
+                let b = &aabbs[i as usize];
+                all.mins = all.mins.min(b.mins);
+                all.maxs = all.maxs.max(b.maxs);
+            }
+            self.obstacles.candidates(&all, candidates);
+            for &i in moving {
+                let (i, s) = (i as usize, &shapes[i as usize]);
+                for &o in candidates.iter() {
+                    let o = o as usize;
+                    let obstacle = &self.obstacles.obstacles[o];
+                    if aabb_overlap(&aabbs[i], &self.obstacles.aabbs[o])
+                        && s.hits_by_gjk(&poses[i], &*obstacle.shape.0, &obstacle.pose)
+                        && report(Hit::Obstacle(i, o))
+                    {
+                        return;
                     }
                 }
             }
-            // Self-collision.
-            if self.self_collision {
-                let spheres = &self.agent.link_spheres;
-                let pairs = &self.agent.pairs;
-                for g in groups {
-                    let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
-                    let d = centres[g.a as usize] - centres[g.b as usize];
-                    if d.length_squared() > (ra + rb) * (ra + rb) || self.agent.proven_apart(g, q) {
+        }
+        // Self-collision.
+        if self.self_collision {
+            let spheres = &self.agent.link_spheres;
+            let pairs = &self.agent.pairs;
+            for g in groups {
+                let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
+                let d = centres[g.a as usize] - centres[g.b as usize];
+                if d.length_squared() > (ra + rb) * (ra + rb) || self.agent.proven_apart(g, q) {
+                    continue;
+                }
+                for &(a, b) in &pairs[g.start as usize..g.end as usize] {
+                    let (a, b) = (a as usize, b as usize);
+                    let r = shapes[a].radius + shapes[b].radius;
+                    if (poses[a].translation - poses[b].translation).length_squared() > r * r {
                         continue;
                     }
-                    for &(a, b) in &pairs[g.start as usize..g.end as usize] {
-                        let (a, b) = (a as usize, b as usize);
-                        let r = shapes[a].radius + shapes[b].radius;
-                        if (poses[a].translation - poses[b].translation).length_squared() > r * r {
-                            continue;
-                        }
-                        if !aabb_overlap(&aabbs[a], &aabbs[b]) {
-                            continue;
-                        }
-                        if shapes[a].hits_shape_by_gjk(&poses[a], &shapes[b], &poses[b])
-                            && report(Hit::SelfPair(a, b))
-                        {
-                            return;
-                        }
+                    if !aabb_overlap(&aabbs[a], &aabbs[b]) {
+                        continue;
+                    }
+                    if shapes[a].hits_shape_by_gjk(&poses[a], &shapes[b], &poses[b])
+                        && report(Hit::SelfPair(a, b))
+                    {
+                        return;
                     }
                 }
             }
-            // The held objects against the scene and the agent.
-            for (k, held) in self.held.iter().chain(&self.other_held).enumerate() {
-                let p = links[held.link] * held.grasp;
-                let aabb = held.shape.compute_aabb(&p);
-                let stop = self.obstacles.for_each_hit(&p, &*held.shape.0, &aabb, |o| {
-                    report(Hit::HeldObstacle(k, o))
-                });
-                if stop {
+        }
+        if !with_held {
+            return;
+        }
+        // The held objects against the scene and the agent.
+        for (k, held) in self.held.iter().chain(&self.other_held).enumerate() {
+            let p = links[held.link] * held.grasp;
+            let aabb = held.shape.compute_aabb(&p);
+            let stop = self.obstacles.for_each_hit(&p, &*held.shape.0, &aabb, |o| {
+                report(Hit::HeldObstacle(k, o))
+            });
+            if stop {
+                return;
+            }
+            let centre = p.translation;
+            for (i, s) in shapes.iter().enumerate() {
+                if held.touching[s.link] {
+                    continue;
+                }
+                let r = s.radius + held.radius;
+                if (poses[i].translation - centre).length_squared() > r * r
+                    || !aabb_overlap(&aabbs[i], &aabb)
+                {
+                    continue;
+                }
+                if s.hits(&poses[i], &*held.shape.0, &p) && report(Hit::HeldShape(k, i)) {
                     return;
                 }
-                let centre = p.translation;
-                for (i, s) in shapes.iter().enumerate() {
-                    if held.touching[s.link] {
-                        continue;
-                    }
-                    let r = s.radius + held.radius;
-                    if (poses[i].translation - centre).length_squared() > r * r
-                        || !aabb_overlap(&aabbs[i], &aabb)
-                    {
-                        continue;
-                    }
-                    if s.hits(&poses[i], &*held.shape.0, &p) && report(Hit::HeldShape(k, i)) {
-                        return;
-                    }
+            }
+        }
+        // The held objects against each other (what one hand carries past the other's).
+        let all = || self.held.iter().chain(&self.other_held);
+        for (k, a) in all().enumerate() {
+            let pa = links[a.link] * a.grasp;
+            for (l, b) in all().enumerate().skip(k + 1) {
+                let pb = links[b.link] * b.grasp;
+                if intersects(&pa, &*a.shape.0, &pb, &*b.shape.0) && report(Hit::HeldPair(k, l)) {
+                    return;
                 }
             }
-            // The held objects against each other (what one hand carries past the other's).
-            let all = || self.held.iter().chain(&self.other_held);
-            for (k, a) in all().enumerate() {
-                let pa = links[a.link] * a.grasp;
-                for (l, b) in all().enumerate().skip(k + 1) {
-                    let pb = links[b.link] * b.grasp;
-                    if intersects(&pa, &*a.shape.0, &pb, &*b.shape.0) && report(Hit::HeldPair(k, l))
-                    {
-                        return;
-                    }
-                }
-            }
-        });
+        }
     }
 }
 
