@@ -42,6 +42,7 @@ use parry3d::shape::{Shape, SharedShape};
 use crate::agent::{AgentModel, ModelError};
 
 mod climbing_hull;
+mod link_capsule;
 mod motion;
 mod pair_cells;
 mod self_collision;
@@ -794,7 +795,10 @@ impl CollisionChecker {
             for g in groups {
                 let (ra, rb) = (spheres[g.a as usize].1, spheres[g.b as usize].1);
                 let d = centres[g.a as usize] - centres[g.b as usize];
-                if d.length_squared() > (ra + rb) * (ra + rb) || self.agent.proven_apart(g, q) {
+                if d.length_squared() > (ra + rb) * (ra + rb)
+                    || self.agent.capsule_gap(g, links) > 0.0
+                    || self.agent.proven_apart(g, q)
+                {
                     continue;
                 }
                 for &(a, b) in &pairs[g.start as usize..g.end as usize] {

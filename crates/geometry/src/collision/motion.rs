@@ -508,7 +508,10 @@ impl CollisionChecker {
                 let g = groups[g as usize];
                 let (a, b) = (g.a as usize, g.b as usize);
                 let r = self.agent.link_spheres[a].1 + self.agent.link_spheres[b].1;
-                let gap = (s.centres[a] - s.centres[b]).length() - r;
+                let mut gap = (s.centres[a] - s.centres[b]).length() - r;
+                if gap < remaining.min(SPLIT) {
+                    gap = gap.max(self.agent.capsule_gap(&g, &s.links));
+                }
                 if gap >= remaining.min(SPLIT) {
                     Measure::Apart(gap)
                 } else {
@@ -518,7 +521,13 @@ impl CollisionChecker {
             Pair::HeldLink(k, l) => {
                 let (h, p) = held(k);
                 let (l, sphere) = (l as usize, self.agent.link_spheres[l as usize]);
-                let gap = (s.centres[l] - p.translation).length() - sphere.1 - h.radius;
+                let mut gap = (s.centres[l] - p.translation).length() - sphere.1 - h.radius;
+                if gap < remaining.min(SPLIT) {
+                    let capsule =
+                        self.agent
+                            .capsule_ball_gap(l, &s.links[l], p.translation, h.radius);
+                    gap = gap.max(capsule);
+                }
                 if gap >= remaining.min(SPLIT) {
                     Measure::Apart(gap)
                 } else {
