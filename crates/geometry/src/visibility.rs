@@ -188,8 +188,20 @@ pub fn visibility_from_upto(
         .map(|m| (m.max(0.0) * (res * res) as f32).floor() as u32 + 1);
     let mut vis = Visibility { shown: 0, ideal: 0 };
     let mut last = 0usize;
+    // Where each occluder's bounds fall in the image: a ray whose pixel is outside cannot meet
+    // it. Per row of pixels, the occluders that reach it.
+    let rects: Vec<Option<[f32; 4]>> = occluders
+        .iter()
+        .map(|o| image_rect(&o.aabb, rot, e))
+        .collect();
+    let mut row: Vec<usize> = Vec::with_capacity(occluders.len());
     for j in 0..res {
         let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
+        row.clear();
+        row.extend(
+            (0..occluders.len()).filter(|&k| rects[k].is_none_or(|r| r[2] <= b && b <= r[3])),
+        );
+        let meets = |k: usize, a: f32| rects[k].is_none_or(|r| r[0] <= a && a <= r[1]);
         for i in 0..res {
             let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
             let dir = rot * Vector::new(1.0, a, b);
@@ -203,9 +215,11 @@ pub fn visibility_from_upto(
             if d.x <= 0.0 || (d.y / d.x).abs() > tx || (d.z / d.x).abs() > ty {
                 continue;
             }
-            let blocked = occluders.get(last).is_some_and(|o| o.blocks(&ray, toi))
-                || occluders.iter().enumerate().any(|(k, o)| {
-                    let hit = k != last && o.blocks(&ray, toi);
+            let blocked = occluders
+                .get(last)
+                .is_some_and(|o| row.contains(&last) && meets(last, a) && o.blocks(&ray, toi))
+                || row.iter().any(|&k| {
+                    let hit = k != last && meets(k, a) && occluders[k].blocks(&ray, toi);
                     if hit {
                         last = k;
                     }
@@ -220,6 +234,31 @@ pub fn visibility_from_upto(
         }
     }
     vis
+}
+
+/// The rectangle `[a0, a1, b0, b1]` of the image plane (x = 1 in the frame of `rot` at the eye
+/// `e`) that holds the projection of box `aabb`: a ray `rot * (1, a, b)` from the eye with
+/// `(a, b)` outside it misses the box. `None` where the box reaches to the eye's plane or
+/// behind it (then no rectangle holds its projection).
+fn image_rect(aabb: &Aabb, rot: parry3d::math::Rotation, e: Vector) -> Option<[f32; 4]> {
+    let inv = rot.inverse();
+    let mut r = [f32::MAX, f32::MIN, f32::MAX, f32::MIN];
+    for k in 0..8 {
+        let c = Vector::new(
+            if k & 1 == 0 { aabb.mins.x } else { aabb.maxs.x },
+            if k & 2 == 0 { aabb.mins.y } else { aabb.maxs.y },
+            if k & 4 == 0 { aabb.mins.z } else { aabb.maxs.z },
+        );
+        let l = inv * (c - e);
+        if l.x <= 1e-3 {
+            return None;
+        }
+        let (a, b) = (l.y / l.x, l.z / l.x);
+        r = [r[0].min(a), r[1].max(a), r[2].min(b), r[3].max(b)];
+    }
+    // Against rounding in the projection and in the rays' directions.
+    const SLACK: f32 = 1e-4;
+    Some([r[0] - SLACK, r[1] + SLACK, r[2] - SLACK, r[3] + SLACK])
 }
 
 /// The bodies (compound ones split into their parts) whose bounds meet `region`, except the
