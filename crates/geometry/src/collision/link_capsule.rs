@@ -105,31 +105,46 @@ fn principal_axis(points: &[Vector], centre: Vector) -> Vector {
     v
 }
 
-/// The distance between segments `p1`-`q1` and `p2`-`q2`: between their closest interior
-/// points where the segments are not parallel and those points exist (solved in double
-/// precision, so that rounding cannot move them off the minimum), else the least distance from
-/// an end of one to the other, where the minimum then lies.
+/// The distance between segments `p1`-`q1` and `p2`-`q2` (Ericson, Real-Time Collision
+/// Detection, 5.1.9), in double precision: rounding moves the closest points it finds by far
+/// less than [`MARGIN`], even for segments all but parallel.
 pub(super) fn segment_distance(p1: Vector, q1: Vector, p2: Vector, q2: Vector) -> f32 {
     let wide = |v: Vector| [v.x as f64, v.y as f64, v.z as f64];
     let (w1, v1, w2, v2) = (wide(p1), wide(q1), wide(p2), wide(q2));
     let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
     let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     let (d1, d2, r) = (sub(v1, w1), sub(v2, w2), sub(w1, w2));
-    let (a, b, e) = (dot(d1, d1), dot(d1, d2), dot(d2, d2));
-    let denom = a * e - b * b;
-    if denom > 1e-12 * a * e && a > 0.0 && e > 0.0 {
-        let (c, f) = (dot(d1, r), dot(d2, r));
-        let s = (b * f - c * e) / denom;
-        let t = (b * s + f) / e;
-        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
-            let gap: [f64; 3] = std::array::from_fn(|i| r[i] + d1[i] * s - d2[i] * t);
-            return dot(gap, gap).sqrt() as f32;
+    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
+    const TINY: f64 = 1e-18;
+    let (s, t) = if a <= TINY && e <= TINY {
+        (0.0, 0.0)
+    } else if a <= TINY {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = dot(d1, r);
+        if e <= TINY {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = dot(d1, d2);
+            let denom = a * e - b * b;
+            // Parallel: any point of the first segment will do; its end.
+            let s = if denom > 1e-12 * a * e {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t = (b * s + f) / e;
+            if t < 0.0 {
+                ((-c / a).clamp(0.0, 1.0), 0.0)
+            } else if t > 1.0 {
+                (((b - c) / a).clamp(0.0, 1.0), 1.0)
+            } else {
+                (s, t)
+            }
         }
-    }
-    point_segment_distance(p1, p2, q2)
-        .min(point_segment_distance(q1, p2, q2))
-        .min(point_segment_distance(p2, p1, q1))
-        .min(point_segment_distance(q2, p1, q1))
+    };
+    let gap: [f64; 3] = std::array::from_fn(|i| r[i] + d1[i] * s - d2[i] * t);
+    dot(gap, gap).sqrt() as f32
 }
 
 /// The distance from point `p` to the segment `a`-`b`.
@@ -167,13 +182,14 @@ mod tests {
         let mut rng = fastrand::Rng::with_seed(5);
         for k in 0..1000 {
             let ends = [0; 4].map(|_| random_vector(&mut rng, 0.5));
-            // Some segments degenerate to points, some parallel, some crossing.
+            // Some segments degenerate to points, some parallel or all but, some crossing.
             let (p1, mut q1, p2, mut q2) = (ends[0], ends[1], ends[2], ends[3]);
-            match k % 5 {
+            match k % 6 {
                 0 => q1 = p1,
                 1 => q2 = p2,
                 2 => q2 = p2 + (q1 - p1) * 0.7,
                 3 => q2 = p2 + (p1 + (q1 - p1) * 0.4 - p2) * 2.0,
+                4 => q2 = p2 + (q1 - p1) * 0.7 + random_vector(&mut rng, 1e-5),
                 _ => {}
             }
             let ours = segment_distance(p1, q1, p2, q2);
