@@ -240,9 +240,18 @@ impl ShapeEntry {
         let (Some(a), Some(b)) = (self.support(), other.support()) else {
             return self.hits_shape(pose, other, other_pose);
         };
-        let boxed = self.bounds.is_some() || other.bounds.is_some();
-        let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
-        (!boxed || gjk(&pa, ba, &pb, bb)) && gjk(pose, a, other_pose, b)
+        let boxes_meet = match (&self.bounds, &other.bounds) {
+            (None, None) => true,
+            // Two boxes: the separating-axis test, exact and cheaper than GJK.
+            (Some((at, ca)), Some((bt, cb))) => {
+                intersects(&(*pose * *at), ca, &(*other_pose * *bt), cb)
+            }
+            _ => {
+                let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
+                gjk(&pa, ba, &pb, bb)
+            }
+        };
+        boxes_meet && gjk(pose, a, other_pose, b)
     }
 
     /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.
