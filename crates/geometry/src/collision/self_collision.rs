@@ -510,6 +510,7 @@ impl SelfCollisionModel {
     /// A lower bound on the distance between the links of `group` at world poses `links` by
     /// their capsules; negative infinity (no bound) for a pair of at most [`CAPSULE_PAIRS`]
     /// shape pairs, whose shapes cost no more to test than the capsules.
+    #[inline]
     pub(super) fn capsule_gap(&self, group: &PairGroup, links: &[Pose]) -> f32 {
         if group.end - group.start <= CAPSULE_PAIRS {
             return f32::NEG_INFINITY;
