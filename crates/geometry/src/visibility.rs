@@ -197,11 +197,10 @@ pub fn visibility_from_upto(
     let mut row: Vec<usize> = Vec::with_capacity(occluders.len());
     for j in 0..res {
         let b = b0 + (b1 - b0) * (j as f32 + 0.5) / res as f32;
-        row.clear();
-        row.extend(
-            (0..occluders.len()).filter(|&k| rects[k].is_none_or(|r| r[2] <= b && b <= r[3])),
-        );
+        let in_row = |k: usize| rects[k].is_none_or(|r| r[2] <= b && b <= r[3]);
         let meets = |k: usize, a: f32| rects[k].is_none_or(|r| r[0] <= a && a <= r[1]);
+        row.clear();
+        row.extend((0..occluders.len()).filter(|&k| in_row(k)));
         for i in 0..res {
             let a = a0 + (a1 - a0) * (i as f32 + 0.5) / res as f32;
             let dir = rot * Vector::new(1.0, a, b);
@@ -217,7 +216,7 @@ pub fn visibility_from_upto(
             }
             let blocked = occluders
                 .get(last)
-                .is_some_and(|o| row.contains(&last) && meets(last, a) && o.blocks(&ray, toi))
+                .is_some_and(|o| in_row(last) && meets(last, a) && o.blocks(&ray, toi))
                 || row.iter().any(|&k| {
                     let hit = k != last && meets(k, a) && occluders[k].blocks(&ray, toi);
                     if hit {
