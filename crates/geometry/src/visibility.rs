@@ -100,13 +100,7 @@ pub fn visibility_from_upto(
     let taabb = obj.shape.compute_aabb(&tpose);
     let centre = taabb.center();
     let lb = obj.shape.compute_local_aabb();
-    let corners: [Vector; 8] = std::array::from_fn(|k| {
-        tpose.transform_point(Vector::new(
-            if k & 1 == 0 { lb.mins.x } else { lb.maxs.x },
-            if k & 2 == 0 { lb.mins.y } else { lb.maxs.y },
-            if k & 4 == 0 { lb.mins.z } else { lb.maxs.z },
-        ))
-    });
+    let corners = lb.vertices().map(|c| tpose.transform_point(c));
     let rectangle = |rot: parry3d::math::Rotation| {
         let mut r = [f32::MAX, f32::MIN, f32::MAX, f32::MIN];
         let mut inside = true;
@@ -242,12 +236,7 @@ pub fn visibility_from_upto(
 fn image_rect(aabb: &Aabb, rot: parry3d::math::Rotation, e: Vector) -> Option<[f32; 4]> {
     let inv = rot.inverse();
     let mut r = [f32::MAX, f32::MIN, f32::MAX, f32::MIN];
-    for k in 0..8 {
-        let c = Vector::new(
-            if k & 1 == 0 { aabb.mins.x } else { aabb.maxs.x },
-            if k & 2 == 0 { aabb.mins.y } else { aabb.maxs.y },
-            if k & 4 == 0 { aabb.mins.z } else { aabb.maxs.z },
-        );
+    for c in aabb.vertices() {
         let l = inv * (c - e);
         if l.x <= 1e-3 {
             return None;

@@ -39,18 +39,10 @@ fn real_pr2_as_in_the_library() -> AgentModel {
 /// The degrees of freedom of the PR2's right arm (its SRDF's chain; the test models carry no
 /// SRDF).
 fn right_arm(model: &AgentModel) -> Vec<usize> {
-    [
-        "r_shoulder_pan_joint",
-        "r_shoulder_lift_joint",
-        "r_upper_arm_roll_joint",
-        "r_elbow_flex_joint",
-        "r_forearm_roll_joint",
-        "r_wrist_flex_joint",
-        "r_wrist_roll_joint",
-    ]
-    .iter()
-    .map(|j| model.dof_index(j).unwrap())
-    .collect()
+    common::PR2_RIGHT_ARM
+        .iter()
+        .map(|j| model.dof_index(j).unwrap())
+        .collect()
 }
 
 fn convex_pieces(model: &AgentModel) -> usize {

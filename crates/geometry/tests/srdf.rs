@@ -1,6 +1,8 @@
 //! The SRDF reader: the shipped models' descriptions, and every kind of bad content with its
 //! `file:line:col`.
 
+mod common;
+
 use geometry::agent::AgentModel;
 
 fn models(file: &str) -> String {
@@ -150,18 +152,10 @@ fn the_fetch_tucked_posture_is_free_of_self_collision() {
 /// spans its joints, and the gripper's joint is a finger's (a link brings its parent joint).
 #[test]
 fn groups_of_joints_and_links_and_an_inferred_arm_are_read_as_moveit_reads_them() {
-    let arm: String = [
-        "r_shoulder_pan_joint",
-        "r_shoulder_lift_joint",
-        "r_upper_arm_roll_joint",
-        "r_elbow_flex_joint",
-        "r_forearm_roll_joint",
-        "r_wrist_flex_joint",
-        "r_wrist_roll_joint",
-    ]
-    .iter()
-    .map(|j| format!("<joint name=\"{j}\"/>"))
-    .collect();
+    let arm: String = common::PR2_RIGHT_ARM
+        .iter()
+        .map(|j| format!("<joint name=\"{j}\"/>"))
+        .collect();
     let srdf = format!(
         "<robot name=\"pr2\">\n\
          <group name=\"arm_with_torso\"><joint name=\"torso_lift_joint\"/>{arm}</group>\n\

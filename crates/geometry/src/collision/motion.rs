@@ -597,28 +597,17 @@ fn ball(e: &ShapeEntry, pose: &Pose) -> (Vector, f32) {
 }
 
 /// Whether agent shapes `a` and `b`, their links at `poses`, are proven at least `needed`
-/// apart (GJK stopped as soon as that is settled).
+/// apart: by their balls, else by GJK (their climbing supports) stopped as soon as that is
+/// settled.
 pub(super) fn proven_apart(
     (a, b): (&ShapeEntry, &ShapeEntry),
     poses: &[Pose],
     needed: f32,
 ) -> bool {
-    shapes_gap((a, b), poses, needed, needed) >= needed
-}
-
-/// A proven lower bound on the distance of agent shapes `a` and `b`, their links at `poses`:
-/// their balls' where that is at least `cheap_enough`, else GJK's (by their climbing supports),
-/// stopped once it is known to be above or below `settles`.
-fn shapes_gap(
-    (a, b): (&ShapeEntry, &ShapeEntry),
-    poses: &[Pose],
-    cheap_enough: f32,
-    settles: f32,
-) -> f32 {
     let (pa, pb) = (poses[a.link] * a.local_pose, poses[b.link] * b.local_pose);
     let balls = (pa * a.ball.0 - pb * b.ball.0).length() - a.ball.1 - b.ball.1;
-    if balls >= cheap_enough {
-        return balls;
+    if balls >= needed {
+        return true;
     }
     let gap = match (a.support(), b.support()) {
         (Some(sa), Some(sb)) => {
@@ -626,11 +615,11 @@ fn shapes_gap(
             // frames' origins: a mesh piece's frame is its link's.
             let pos12 = pa.inv_mul(&pb);
             let mut start = a.ball.0 - pos12 * b.ball.0;
-            support_gap_until(&pos12, (sa, sb), &mut start, settles)
+            support_gap_until(&pos12, (sa, sb), &mut start, needed)
         }
         _ => lower_bound_distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
     };
-    gap.max(balls)
+    gap >= needed
 }
 
 /// A held object as a body of the link holding it.

@@ -163,19 +163,7 @@ impl ShapeEntry {
     fn points(&self) -> Vec<Vector> {
         let local: Vec<Vector> = match self.shape.as_convex_polyhedron() {
             Some(hull) => hull.points().to_vec(),
-            None => {
-                let b = self.shape.compute_local_aabb();
-                (0..8)
-                    .map(|k| {
-                        let pick = |bit: u32, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
-                        Vector::new(
-                            pick(1, b.mins.x, b.maxs.x),
-                            pick(2, b.mins.y, b.maxs.y),
-                            pick(4, b.mins.z, b.maxs.z),
-                        )
-                    })
-                    .collect()
-            }
+            None => self.shape.compute_local_aabb().vertices().to_vec(),
         };
         local.into_iter().map(|p| self.local_pose * p).collect()
     }

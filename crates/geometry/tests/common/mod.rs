@@ -8,6 +8,18 @@ use geometry::collision::{CollisionChecker, Contact, Obstacle, StaticObstacles};
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
 
+/// The joints of the PR2's right arm, shoulder to wrist (the real PR2's and the hand-written
+/// one's names).
+pub const PR2_RIGHT_ARM: [&str; 7] = [
+    "r_shoulder_pan_joint",
+    "r_shoulder_lift_joint",
+    "r_upper_arm_roll_joint",
+    "r_elbow_flex_joint",
+    "r_forearm_roll_joint",
+    "r_wrist_flex_joint",
+    "r_wrist_roll_joint",
+];
+
 /// The SRDF posture `name` of `model`, as `Configuration::set_many` takes it.
 pub fn posture<'m>(model: &'m AgentModel, name: &str) -> Vec<(&'m str, f32)> {
     let state = model
