@@ -362,6 +362,37 @@ struct Scratch {
     candidates: Vec<u32>,
     /// World centres of the links' bounding spheres.
     centres: Vec<Vector>,
+    /// Per shape, the `generation` of the links its pose and AABB were made from.
+    stamps: Vec<u32>,
+    /// Counts the link posings.
+    generation: u32,
+}
+
+impl Scratch {
+    /// Marks the shapes' poses stale: the links moved.
+    fn links_moved(&mut self) {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            // Wrapped: no stamp may equal a later generation by chance.
+            self.stamps.fill(0);
+            self.generation = 1;
+        }
+    }
+
+    /// Marks every shape posed for the links as they are.
+    fn all_posed(&mut self) {
+        self.stamps.clear();
+        self.stamps.resize(self.poses.len(), self.generation);
+    }
+
+    /// Poses shape `i` (`e`) and its AABB from its link, unless done since the links moved.
+    fn pose_shape(&mut self, i: usize, e: &self_collision::ShapeEntry) {
+        if self.stamps[i] != self.generation {
+            self.poses[i] = self.links[e.link] * e.local_pose;
+            self.aabbs[i] = e.aabb(&self.poses[i]);
+            self.stamps[i] = self.generation;
+        }
+    }
 }
 
 thread_local! {
@@ -681,16 +712,43 @@ impl CollisionChecker {
         &'a [self_collision::PairGroup],
         Option<&'a FixedJoints>,
     ) {
-        let model = &self.agent.model;
+        let posed = self.pose_links_into(q, s);
         let shapes = &self.agent.shapes;
+        match posed.2 {
+            Some(f) => {
+                s.poses.clear();
+                s.poses.extend_from_slice(&f.shape_poses);
+                s.aabbs.clear();
+                s.aabbs.extend_from_slice(&f.shape_aabbs);
+            }
+            None => {
+                s.poses.resize(shapes.len(), Pose::IDENTITY);
+                s.aabbs.resize(shapes.len(), Aabb::new_invalid());
+            }
+        }
+        for &i in posed.0 {
+            let (i, e) = (i as usize, &shapes[i as usize]);
+            s.poses[i] = s.links[e.link] * e.local_pose;
+            s.aabbs[i] = e.aabb(&s.poses[i]);
+        }
+        s.all_posed();
+        posed
+    }
+
+    /// [`CollisionChecker::pose_into`] for the links alone (and their spheres' centres): the
+    /// shapes' poses are left stale, to be made by [`Scratch::pose_shape`] where needed.
+    fn pose_links_into<'a>(
+        &'a self,
+        q: &[f32],
+        s: &mut Scratch,
+    ) -> (
+        &'a [u16],
+        &'a [self_collision::PairGroup],
+        Option<&'a FixedJoints>,
+    ) {
+        let model = &self.agent.model;
         let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
-        let Scratch {
-            links,
-            poses,
-            aabbs,
-            centres,
-            ..
-        } = s;
+        let links = &mut s.links;
         let (moving, groups): (&[u16], &[self_collision::PairGroup]) = match fixed {
             Some(f) => {
                 links.clear();
@@ -701,32 +759,18 @@ impl CollisionChecker {
                             links[joint.parent] * joint.transform(model.joint_value(j, q));
                     }
                 }
-                poses.clear();
-                poses.extend_from_slice(&f.shape_poses);
-                aabbs.clear();
-                aabbs.extend_from_slice(&f.shape_aabbs);
-                for &i in &f.moving_shapes {
-                    let (i, s) = (i as usize, &shapes[i as usize]);
-                    poses[i] = links[s.link] * s.local_pose;
-                    aabbs[i] = s.aabb(&poses[i]);
-                }
                 (&f.moving_shapes, &f.moving_groups)
             }
             None => {
                 model.link_poses_into(self.base, q, links);
-                poses.clear();
-                aabbs.clear();
-                for s in shapes {
-                    let p = links[s.link] * s.local_pose;
-                    poses.push(p);
-                    aabbs.push(s.aabb(&p));
-                }
                 (&self.agent.all_shapes, &self.agent.groups)
             }
         };
         let spheres = &self.agent.link_spheres;
-        centres.clear();
-        centres.extend(links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
+        s.centres.clear();
+        s.centres
+            .extend(s.links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
+        s.links_moved();
         (moving, groups, fixed)
     }
 
@@ -763,6 +807,7 @@ impl CollisionChecker {
             aabbs,
             candidates,
             centres,
+            ..
         } = s;
         let shapes = &self.agent.shapes;
         // Agent against the scene: first the obstacles near the moving shapes, then per shape.

@@ -222,7 +222,7 @@ impl CollisionChecker {
                 for (v, (x, y)) in q.iter_mut().zip(a.iter().zip(b)) {
                     *v = x + t * (y - x);
                 }
-                self.pose_into(&q, s);
+                self.pose_links_into(&q, s);
             };
             self.advance(items, floor, (&speed, groups), &mut s, pose_at)
         })
@@ -267,6 +267,11 @@ impl CollisionChecker {
             let base = base_at(t);
             s.links.clear();
             s.links.extend(relative.iter().map(|l| base * *l));
+            s.links_moved();
+        };
+        SCRATCH.with(|scratch| {
+            let mut s = scratch.borrow_mut();
+            pose_at(0.0, &mut s);
             s.poses.clear();
             s.aabbs.clear();
             for e in &self.agent.shapes {
@@ -274,10 +279,7 @@ impl CollisionChecker {
                 s.poses.push(p);
                 s.aabbs.push(e.aabb(&p));
             }
-        };
-        SCRATCH.with(|scratch| {
-            let mut s = scratch.borrow_mut();
-            pose_at(0.0, &mut s);
+            s.all_posed();
             let mut items = Vec::new();
             let mut push = |pair, rate: f32| items.extend(Item::moving(pair, rate, 0.0));
             let mut candidates = std::mem::take(&mut s.candidates);
@@ -327,6 +329,7 @@ impl CollisionChecker {
                     continue;
                 }
                 let remaining = item.rate * (1.0 - t);
+                self.pose_shapes_of(item.pair, s);
                 let mut warm = item.warm;
                 let measured = self.measure(item.pair, remaining, groups, s, &mut warm);
                 items[k - 1].warm = warm;
@@ -354,6 +357,21 @@ impl CollisionChecker {
             }
             pose_at(t, s);
             configurations += 1;
+        }
+    }
+
+    /// Poses the agent shapes of `pair` in `s` where the links moved since.
+    fn pose_shapes_of(&self, pair: Pair, s: &mut Scratch) {
+        let shapes = &self.agent.shapes;
+        match pair {
+            Pair::Obstacle(i, _) | Pair::HeldShape(_, i) => {
+                s.pose_shape(i as usize, &shapes[i as usize]);
+            }
+            Pair::Shapes(a, b) => {
+                s.pose_shape(a as usize, &shapes[a as usize]);
+                s.pose_shape(b as usize, &shapes[b as usize]);
+            }
+            _ => {}
         }
     }
 
@@ -540,6 +558,10 @@ impl CollisionChecker {
                 let ((ca, ra), (cb, rb)) = (ball(ea, pa), ball(eb, pb));
                 let sphere = (ca - cb).length() - ra - rb;
                 let mut cheap = sphere.max(aabb_gap(&s.aabbs[a as usize], &s.aabbs[b as usize]));
+                if cheap < remaining.min(CHEAP_ENOUGH) {
+                    let links = (&s.links[ea.link], &s.links[eb.link]);
+                    cheap = cheap.max(ea.capsule_gap(links.0, eb, links.1));
+                }
                 if cheap < remaining.min(CHEAP_ENOUGH) {
                     cheap = cheap.max(box_gap(ea, pa, Some(eb), &*eb.shape.0, pb));
                 }

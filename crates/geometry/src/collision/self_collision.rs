@@ -124,6 +124,9 @@ pub(super) struct ShapeEntry {
     /// A ball that holds the shape: its centre in the shape's frame, its radius (tighter than
     /// `radius` for a mesh piece, whose frame is its link's).
     pub(super) ball: (Vector, f32),
+    /// For a polyhedron: a capsule that holds it, in its link's frame (a cheap bound before
+    /// GJK on its vertices).
+    pub(super) capsule: Option<LinkCapsule>,
 }
 
 impl ShapeEntry {
@@ -147,15 +150,30 @@ impl ShapeEntry {
         } else {
             (sphere.center, sphere.radius)
         };
-        ShapeEntry {
+        let mut entry = ShapeEntry {
             link,
             local_pose,
             radius,
             bounds,
             climb,
             ball,
+            capsule: None,
             shape,
+        };
+        if entry.shape.as_convex_polyhedron().is_some() {
+            entry.capsule = LinkCapsule::enclosing(&entry.points());
         }
+        entry
+    }
+
+    /// A lower bound on the distance between this shape and `other`, their links at `link`
+    /// and `other_link`, by their capsules; negative infinity where either has none.
+    pub(super) fn capsule_gap(&self, link: &Pose, other: &ShapeEntry, other_link: &Pose) -> f32 {
+        let (Some(ca), Some(cb)) = (&self.capsule, &other.capsule) else {
+            return f32::NEG_INFINITY;
+        };
+        let ((pa, qa), (pb, qb)) = (ca.at(link), cb.at(other_link));
+        segment_distance(pa, qa, pb, qb) - ca.radius - cb.radius
     }
 
     /// Points in its link's frame whose convex hull holds the shape: a polyhedron's vertices,
@@ -818,6 +836,43 @@ mod tests {
                     .map_or(0.0, |d| d.distance)
             })
             .fold(f32::INFINITY, f32::min)
+    }
+
+    #[test]
+    fn shape_capsules_never_put_polyhedra_further_apart_than_they_are() {
+        // Long random hulls (a forearm's pieces) on two links, at random poses near each other.
+        let mut rng = fastrand::Rng::with_seed(3);
+        let mut hull = |link: usize| {
+            let half = Vector::new(0.02 + 0.03 * rng.f32(), 0.03, 0.08 + 0.1 * rng.f32());
+            let points: Vec<Vector> = (0..200)
+                .map(|_| {
+                    let v = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
+                    v.normalize() * half
+                })
+                .collect();
+            let shape = SharedShape::convex_hull(&points).expect("hull");
+            let at = Pose::from_rotation(parry3d::math::Rotation::from_rotation_x(rng.f32()));
+            ShapeEntry::new(link, at, shape, 0.3)
+        };
+        let (ea, eb) = (hull(1), hull(2));
+        assert!(ea.capsule.is_some() && eb.capsule.is_some());
+        let (mut told, mut near) = (0, 0);
+        for _ in 0..2000 {
+            let axis = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
+            let turn = parry3d::math::Rotation::from_scaled_axis(axis * 6.0);
+            let offset = Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * 0.5;
+            let (la, lb) = (Pose::IDENTITY, Pose::from_parts(offset, turn));
+            let bound = ea.capsule_gap(&la, &eb, &lb);
+            let (pa, pb) = (la * ea.local_pose, lb * eb.local_pose);
+            let exact = parry3d::query::distance(&pa, &*ea.shape.0, &pb, &*eb.shape.0)
+                .unwrap()
+                .distance;
+            assert!(bound <= exact + 1e-5, "{bound} above {exact}");
+            near += usize::from(exact < 0.02);
+            told += usize::from(exact > 0.0 && bound > 0.5 * exact);
+        }
+        // Not vacuous: pairs come near, and the bound is within half the distance for most.
+        assert!(near > 50 && told > 1000, "{near} near, {told} told apart");
     }
 
     #[test]
