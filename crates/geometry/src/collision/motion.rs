@@ -40,6 +40,8 @@ pub(super) type Body = (usize, Vector, f32);
 #[derive(Clone, Debug, Default)]
 pub(super) struct JointReach {
     above: Vec<Vec<Above>>,
+    /// Per joint, its child link and its axis in the child's frame (through its origin).
+    axes: Vec<(usize, Vector)>,
 }
 
 impl JointReach {
@@ -74,7 +76,8 @@ impl JointReach {
             }
             above[joint.child] = list;
         }
-        JointReach { above }
+        let axes = model.joints().iter().map(|j| (j.child, j.axis)).collect();
+        JointReach { above, axes }
     }
 
     /// A bound on the speed (metres per unit of the motion's parameter) of the points of
@@ -82,6 +85,14 @@ impl JointReach {
     /// `speed[j]` (absolute values). The joints above both bodies move them together and do
     /// not count.
     pub(super) fn rate(&self, speed: &[f32], body: Body, other: Option<Body>) -> f32 {
+        let (a, b) = self.sides(body, other);
+        let rest = other.map_or(0.0, |o| b.iter().map(|e| e.speed(speed, o)).sum());
+        a.iter().map(|e| e.speed(speed, body)).sum::<f32>() + rest
+    }
+
+    /// The joints that move `body` relative to `other` (the world without it): those above
+    /// each, less those above both.
+    fn sides(&self, body: Body, other: Option<Body>) -> (&[Above], &[Above]) {
         let a = &self.above[body.0];
         let b = other.map_or(&[][..], |o| &self.above[o.0][..]);
         let common = a
@@ -89,26 +100,79 @@ impl JointReach {
             .zip(b)
             .take_while(|(x, y)| x.joint == y.joint)
             .count();
-        let side = |list: &[Above], (_, centre, radius): Body| -> f32 {
-            list.iter()
-                .map(|e| {
-                    let s = speed[e.joint as usize];
-                    if e.prismatic || s == 0.0 {
-                        return s;
-                    }
-                    let from_axis = match e.rigid {
-                        Some((frame, axis)) => {
-                            let c = frame * centre;
-                            (c - axis * c.dot(axis)).length()
-                        }
-                        None => e.arm + centre.length(),
-                    };
-                    s * (from_axis + radius)
-                })
-                .sum()
+        (&a[common..], &b[common..])
+    }
+
+    /// How far along the motion (in its parameter) `body` and `other` may go before their
+    /// points move `gap` relative to each other, from the joints' axes as posed in `links`:
+    /// the points of a body move about an axis at most as fast as their distance from it,
+    /// which grows no faster than the joints below the axis move them ([`JointReach::rate`]
+    /// of those). Tighter than `gap` over [`JointReach::rate`] where an arm is folded: the
+    /// static bound takes every joint's distance as if the arm were stretched.
+    pub(super) fn local_step(
+        &self,
+        speed: &[f32],
+        (body, other): (Body, Option<Body>),
+        links: &[Pose],
+        gap: f32,
+    ) -> f32 {
+        let (a, b) = self.sides(body, other);
+        let (mut lin, mut quad) = self.local_side(speed, a, body, links);
+        if let Some(o) = other {
+            let (l, q) = self.local_side(speed, b, o, links);
+            (lin, quad) = (lin + l, quad + q);
+        }
+        // The relative motion over a step h is at most lin h + quad h^2 / 2.
+        if quad > 0.0 {
+            2.0 * gap / (lin + (lin * lin + 2.0 * quad * gap).sqrt())
+        } else if lin > 0.0 {
+            gap / lin
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// One side of [`JointReach::local_step`]: the speed of `body`'s points over joints `list`
+    /// now (`lin`), and how fast that bound may grow (`quad`).
+    fn local_side(&self, speed: &[f32], list: &[Above], body: Body, links: &[Pose]) -> (f32, f32) {
+        let (link, centre, radius) = body;
+        let c = links[link] * centre;
+        let (mut lin, mut quad, mut below) = (0.0, 0.0, 0.0);
+        for e in list.iter().rev() {
+            let s = speed[e.joint as usize];
+            if s == 0.0 {
+                continue;
+            }
+            if !e.prismatic {
+                let (child, axis) = self.axes[e.joint as usize];
+                let (frame, axis) = (&links[child], links[child].rotation * axis);
+                let v = c - frame.translation;
+                lin += s * ((v - axis * v.dot(axis)).length() + radius);
+                quad += s * below;
+            } else {
+                lin += s;
+            }
+            below += e.speed(speed, body);
+        }
+        (lin, quad)
+    }
+}
+
+impl Above {
+    /// A bound on the speed of `body`'s points about this joint, over all configurations.
+    fn speed(&self, speed: &[f32], (_, centre, radius): Body) -> f32 {
+        let s = speed[self.joint as usize];
+        if self.prismatic || s == 0.0 {
+            return s;
+        }
+        let from_axis = match self.rigid {
+            Some((frame, axis)) => {
+                let c = frame * centre;
+                (c - axis * c.dot(axis)).length()
+            }
+            None => self.arm + centre.length(),
         };
-        let rest = other.map_or(0.0, |o| side(&b[common..], o));
-        side(&a[common..], body) + rest
+        s * (from_axis + radius)
     }
 }
 
@@ -155,8 +219,9 @@ impl Item {
 
 /// What a measurement of a pair found.
 enum Measure {
-    /// Apart by at least this much.
-    Apart(f32),
+    /// Apart by at least this much; whether that was measured exactly (between the shapes
+    /// themselves, not their bounds).
+    Apart(f32, bool),
     /// Near: measure the shapes of the links instead.
     Split,
     /// In collision.
@@ -344,7 +409,17 @@ impl CollisionChecker {
                         self.split(speed, item.pair, groups, t, &mut items);
                         f32::INFINITY
                     }
-                    Measure::Apart(d) => t + d.max(floor) / item.rate,
+                    Measure::Apart(d, exact) => {
+                        let gap = d.max(floor);
+                        let mut step = gap / item.rate;
+                        // Worth its cost where the pair is measured exactly: fewer steps.
+                        if exact && !speed.is_empty() {
+                            let bodies = self.bodies(item.pair, groups);
+                            step =
+                                step.max(self.agent.reach.local_step(speed, bodies, &s.links, gap));
+                        }
+                        t + step
+                    }
                 };
                 items[k - 1].next = if next > 1.0 { f32::INFINITY } else { next };
             }
@@ -357,6 +432,28 @@ impl CollisionChecker {
             }
             pose_at(t, s);
             configurations += 1;
+        }
+    }
+
+    /// The bodies of `pair` for speed bounds: the first, and the second where it moves with
+    /// the agent.
+    fn bodies(&self, pair: Pair, groups: &[PairGroup]) -> (Body, Option<Body>) {
+        let shapes = &self.agent.shapes;
+        let sphere = |l: usize| {
+            let (c, r) = self.agent.link_spheres[l];
+            (l, c, r)
+        };
+        match pair {
+            Pair::Obstacle(i, _) => (body(&shapes[i as usize]), None),
+            Pair::Links(g) => {
+                let g = groups[g as usize];
+                (sphere(g.a as usize), Some(sphere(g.b as usize)))
+            }
+            Pair::Shapes(a, b) => (body(&shapes[a as usize]), Some(body(&shapes[b as usize]))),
+            Pair::HeldObstacle(k, _) => (held_body(self.held_k(k)), None),
+            Pair::HeldLink(k, l) => (held_body(self.held_k(k)), Some(sphere(l as usize))),
+            Pair::HeldShape(k, i) => (held_body(self.held_k(k)), Some(body(&shapes[i as usize]))),
+            Pair::HeldObjects(k, l) => (held_body(self.held_k(k)), Some(held_body(self.held_k(l)))),
         }
     }
 
@@ -497,15 +594,15 @@ impl CollisionChecker {
             |cheap: f32, exact: &dyn Fn(&mut Vector) -> f32, hit: &dyn Fn() -> bool, h: Hit| {
                 // A cheap bound that settles the rest of the motion, or is worth a few steps.
                 if cheap >= remaining.min(CHEAP_ENOUGH) {
-                    return Measure::Apart(cheap);
+                    return Measure::Apart(cheap, false);
                 }
                 let d = exact(warm);
                 if d > 0.0 {
-                    Measure::Apart(d.max(cheap))
+                    Measure::Apart(d.max(cheap), true)
                 } else if hit() {
                     Measure::Hit(h)
                 } else {
-                    Measure::Apart(cheap.max(0.0))
+                    Measure::Apart(cheap.max(0.0), true)
                 }
             };
         match pair {
@@ -531,7 +628,7 @@ impl CollisionChecker {
                     gap = gap.max(self.agent.capsule_gap(&g, &s.links));
                 }
                 if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap)
+                    Measure::Apart(gap, false)
                 } else {
                     Measure::Split
                 }
@@ -547,7 +644,7 @@ impl CollisionChecker {
                     gap = gap.max(capsule);
                 }
                 if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap)
+                    Measure::Apart(gap, false)
                 } else {
                     Measure::Split
                 }
@@ -837,6 +934,108 @@ mod tests {
             }
         }
         best.1
+    }
+
+    fn unit(rng: &mut fastrand::Rng) -> Vector {
+        Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5).normalize()
+    }
+
+    /// Asserts that over [`JointReach::local_step`] from `t0` of the motion `a` to `b`, no
+    /// point of `body` moves more than `gap` in the world (`other` none), or no two points of
+    /// `body` and `other` come nearer or go further by more than it. Whether the step is much
+    /// longer than the static bound's.
+    fn assert_local_step(
+        (model, reach): (&AgentModel, &JointReach),
+        (a, b): (&[f32], &[f32]),
+        (body, other): (Body, Option<Body>),
+        (t0, gap): (f32, f32),
+        rng: &mut fastrand::Rng,
+    ) -> bool {
+        let speed: Vec<f32> = (0..model.joints().len())
+            .map(|j| (model.joint_value(j, b) - model.joint_value(j, a)).abs())
+            .collect();
+        let at = |t: f32| {
+            let q: Vec<f32> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
+            model.link_poses(Pose::IDENTITY, &q)
+        };
+        let start = at(t0);
+        let step = reach.local_step(&speed, (body, other), &start, gap);
+        let point = |(l, c, r): Body, poses: &[Pose], d: Vector| poses[l] * (c + d * r);
+        for k in 1..=10 {
+            let end = at(t0 + step.min(1.0) * k as f32 / 10.0);
+            for _ in 0..20 {
+                let (da, db) = (unit(rng) * rng.f32(), unit(rng) * rng.f32());
+                let moved = match other {
+                    None => (point(body, &end, da) - point(body, &start, da)).length(),
+                    Some(o) => {
+                        let apart = |poses: &[Pose]| {
+                            (point(body, poses, da) - point(o, poses, db)).length()
+                        };
+                        (apart(&end) - apart(&start)).abs()
+                    }
+                };
+                assert!(
+                    moved <= gap * 1.001 + 1e-6,
+                    "moved {moved} over a gap of {gap}"
+                );
+            }
+        }
+        step > gap / reach.rate(&speed, body, other) * 1.2
+    }
+
+    #[test]
+    fn a_local_step_never_lets_two_bodies_come_nearer_than_the_gap() {
+        let path = format!("{}/../../models/pr2.urdf", env!("CARGO_MANIFEST_DIR"));
+        let model = AgentModel::from_urdf_file(&path).unwrap();
+        let reach = JointReach::new(&model);
+        let links = model.links().len();
+        let mut rng = fastrand::Rng::with_seed(5);
+        // Random motions of all the PR2's joints, random balls on its links, alone or paired.
+        let mut longer = 0;
+        for _ in 0..1000 {
+            let (a, b) = (
+                model.random_configuration(&mut rng).into_vec(),
+                model.random_configuration(&mut rng).into_vec(),
+            );
+            let ball = |rng: &mut fastrand::Rng| (rng.usize(0..links), unit(rng) * 0.1, 0.05);
+            let body = ball(&mut rng);
+            let other = rng.bool().then(|| ball(&mut rng));
+            let (t0, gap) = (rng.f32() * 0.8, 0.01 + 0.05 * rng.f32());
+            let bodies = (body, other);
+            longer += usize::from(assert_local_step(
+                (&model, &reach),
+                (&a, &b),
+                bodies,
+                (t0, gap),
+                &mut rng,
+            ));
+        }
+        // Not vacuous: the local step is often much longer than the static bound's.
+        assert!(longer > 250, "{longer} of 1000 longer");
+        // An arm unfolding while it turns: the hand's distance from the shoulder's axis grows
+        // fast, which the bound must allow for over long steps.
+        let dof = |name: &str| model.dof_index(name).unwrap();
+        let tool = (
+            model.link_id("r_gripper_tool_frame").unwrap(),
+            Vector::ZERO,
+            0.0,
+        );
+        for gap in [0.05, 0.1, 0.2, 0.4, 0.8] {
+            let mut a = model.default_configuration().into_vec();
+            let mut b = a.clone();
+            (a[dof("r_elbow_flex_joint")], b[dof("r_elbow_flex_joint")]) = (-2.3, 0.0);
+            (
+                a[dof("r_shoulder_pan_joint")],
+                b[dof("r_shoulder_pan_joint")],
+            ) = (0.7, -2.2);
+            assert_local_step(
+                (&model, &reach),
+                (&a, &b),
+                (tool, None),
+                (0.0, gap),
+                &mut rng,
+            );
+        }
     }
 
     #[test]
