@@ -228,10 +228,14 @@ enum Measure {
     Hit(Hit),
 }
 
-/// [`support_gap`] stops once its best gap is within this fraction of GJK's upper bound; a
-/// distance of parry's (shapes without a support function) is discounted by it (its relative
-/// tolerance, with margin).
+/// A distance of parry's (shapes without a support function) is discounted by this fraction
+/// (its relative tolerance, with margin).
 const GJK_RELATIVE: f32 = 0.005;
+
+/// [`support_gap`] stops once its best gap is within this fraction of GJK's upper bound: a
+/// step of conservative advancement at most this much shorter than the exact distance would
+/// allow, for fewer GJK iterations (0.5 % took 2 % more instructions in the bench).
+const GJK_SETTLED: f32 = 0.05;
 
 /// A pair due within this much of the motion's parameter is measured with the pairs due now.
 const BATCH: f32 = 0.02;
@@ -817,7 +821,7 @@ fn support_gap_until(
         if lower > best.0 {
             best = (lower, dir);
         }
-        if upper - best.0 <= GJK_RELATIVE * upper
+        if upper - best.0 <= GJK_SETTLED * upper
             || (enough.is_finite() && (best.0 >= enough || upper < enough))
         {
             break;
