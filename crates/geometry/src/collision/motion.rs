@@ -506,15 +506,22 @@ impl CollisionChecker {
         if self.self_collision {
             let spheres = &self.agent.link_spheres;
             for (g, pg) in groups.iter().enumerate() {
-                if self.agent.proven_apart_along(pg, motion) {
-                    continue;
-                }
                 let (a, b) = (pg.a as usize, pg.b as usize);
                 let (ba, bb) = (
                     (a, spheres[a].0, spheres[a].1),
                     (b, spheres[b].0, spheres[b].1),
                 );
-                push(Pair::Links(g as u32), reach.rate(speed, ba, Some(bb)));
+                let rate = reach.rate(speed, ba, Some(bb));
+                // Too far apart to meet in the whole motion (their balls, then capsules), or
+                // proven apart all along it by their cells.
+                let balls = (s.centres[a] - s.centres[b]).length() - ba.2 - bb.2;
+                if balls > rate
+                    || self.agent.capsule_gap(pg, &s.links) > rate
+                    || self.agent.proven_apart_along(pg, motion)
+                {
+                    continue;
+                }
+                push(Pair::Links(g as u32), rate);
             }
         }
         let held: Vec<&HeldObject> = self.held.iter().chain(&self.other_held).collect();
