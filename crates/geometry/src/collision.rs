@@ -34,7 +34,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::{Pose, Vector};
+use parry3d::math::{Mat3, Pose, Vector};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query;
 use parry3d::shape::{Shape, SharedShape};
@@ -726,10 +726,16 @@ impl CollisionChecker {
                 s.aabbs.resize(shapes.len(), Aabb::new_invalid());
             }
         }
+        // A link's shapes come together: its rotation matrix serves them all.
+        let mut abs = (usize::MAX, Mat3::IDENTITY);
         for &i in posed.0 {
             let (i, e) = (i as usize, &shapes[i as usize]);
-            s.poses[i] = s.links[e.link] * e.local_pose;
-            s.aabbs[i] = e.aabb(&s.poses[i]);
+            let link = &s.links[e.link];
+            if abs.0 != e.link && e.bounded_in_link() {
+                abs = (e.link, Mat3::from_quat(link.rotation).abs());
+            }
+            s.poses[i] = *link * e.local_pose;
+            s.aabbs[i] = e.aabb_on_link(&s.poses[i], link, &abs.1);
         }
         s.all_posed();
         posed

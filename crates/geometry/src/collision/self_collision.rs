@@ -6,7 +6,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use parry3d::bounding_volume::Aabb;
-use parry3d::math::{Pose, Vector};
+use parry3d::math::{Mat3, Pose, Vector};
 use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
@@ -127,6 +127,9 @@ pub(super) struct ShapeEntry {
     /// For a polyhedron: a capsule that holds it, in its link's frame (a cheap bound before
     /// GJK on its vertices).
     pub(super) capsule: Option<LinkCapsule>,
+    /// For a polyhedron: a box in its link's frame (centre, half extents) that holds its
+    /// bounding box (see [`ShapeEntry::aabb_on_link`]).
+    bounds_in_link: Option<(Vector, Vector)>,
 }
 
 impl ShapeEntry {
@@ -158,6 +161,10 @@ impl ShapeEntry {
             climb,
             ball,
             capsule: None,
+            bounds_in_link: bounds.map(|(at, cuboid)| {
+                let abs = Mat3::from_quat(local_pose.rotation).abs();
+                (local_pose * at.translation, abs * cuboid.half_extents)
+            }),
             shape,
         };
         if entry.shape.as_convex_polyhedron().is_some() {
@@ -191,6 +198,25 @@ impl ShapeEntry {
     pub(super) fn aabb(&self, pose: &Pose) -> Aabb {
         match &self.bounds {
             Some((at, cuboid)) => cuboid.compute_aabb(&(*pose * *at)),
+            None => self.shape.compute_aabb(pose),
+        }
+    }
+
+    /// Whether [`ShapeEntry::aabb_on_link`] needs its matrix.
+    pub(super) fn bounded_in_link(&self) -> bool {
+        self.bounds_in_link.is_some()
+    }
+
+    /// [`ShapeEntry::aabb`] from its link's pose `link` and that pose's rotation matrix with
+    /// absolute entries `abs` (shared by the link's shapes): for a polyhedron, that of its
+    /// bounding box as it lies in the link's frame (the same box for a mesh piece, whose frame
+    /// is its link's).
+    pub(super) fn aabb_on_link(&self, pose: &Pose, link: &Pose, abs: &Mat3) -> Aabb {
+        match &self.bounds_in_link {
+            Some((centre, half)) => {
+                let (c, h) = (*link * *centre, *abs * *half);
+                Aabb::new(c - h, c + h)
+            }
             None => self.shape.compute_aabb(pose),
         }
     }
