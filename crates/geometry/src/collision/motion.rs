@@ -2,7 +2,10 @@
 //! collisions by conservative advancement (Schwarzer, Saha and Latombe, "Exact collision
 //! checking of robot paths", 2002): two bodies at distance `d` stay apart while their relative
 //! motion is under `d`, and that motion is bounded by each joint's step times the bodies'
-//! greatest distance from its axis. Each pair of bodies is re-measured on its own schedule: a
+//! greatest distance from its axis: over every configuration (the arm as if stretched), or,
+//! after an exact measurement, as the joints are posed (a folded arm's hand near the shoulder's
+//! axis), allowing for that distance to grow with the joints below the axis
+//! ([`JointReach::local_step`]). Each pair of bodies is re-measured on its own schedule: a
 //! far pair once a motion, a near one as it comes closer. A pair nearer than `floor` is
 //! re-measured every `floor` of relative motion, so a contact between two measurements is at
 //! most `floor / 2` deep; elsewhere the motion is free everywhere, not only at sampled
