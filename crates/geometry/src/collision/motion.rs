@@ -730,7 +730,7 @@ fn ball(e: &ShapeEntry, pose: &Pose) -> (Vector, f32) {
 }
 
 /// Whether agent shapes `a` and `b`, their links at `poses`, are proven at least `needed`
-/// apart: by their balls, else by GJK (their climbing supports) stopped as soon as that is
+/// apart: by their balls or capsules, else by GJK (their climbing supports) stopped as soon as that is
 /// settled.
 pub(super) fn proven_apart(
     (a, b): (&ShapeEntry, &ShapeEntry),
@@ -739,7 +739,7 @@ pub(super) fn proven_apart(
 ) -> bool {
     let (pa, pb) = (poses[a.link] * a.local_pose, poses[b.link] * b.local_pose);
     let balls = (pa * a.ball.0 - pb * b.ball.0).length() - a.ball.1 - b.ball.1;
-    if balls >= needed {
+    if balls >= needed || a.capsule_gap(&poses[a.link], b, &poses[b.link]) >= needed {
         return true;
     }
     let gap = match (a.support(), b.support()) {
