@@ -730,8 +730,8 @@ fn ball(e: &ShapeEntry, pose: &Pose) -> (Vector, f32) {
 }
 
 /// Whether agent shapes `a` and `b`, their links at `poses`, are proven at least `needed`
-/// apart: by their balls or capsules, else by GJK (their climbing supports) stopped as soon as that is
-/// settled.
+/// apart: by their balls or capsules, else by GJK (their climbing supports) stopped as soon as
+/// that is settled.
 pub(super) fn proven_apart(
     (a, b): (&ShapeEntry, &ShapeEntry),
     poses: &[Pose],
