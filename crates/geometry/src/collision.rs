@@ -858,7 +858,13 @@ impl CollisionChecker {
                     if (poses[a].translation - poses[b].translation).length_squared() > r * r {
                         continue;
                     }
-                    if !aabb_overlap(&aabbs[a], &aabbs[b]) {
+                    if !aabb_overlap(&aabbs[a], &aabbs[b])
+                        || shapes[a].capsule_gap(
+                            &links[shapes[a].link],
+                            &shapes[b],
+                            &links[shapes[b].link],
+                        ) > 0.0
+                    {
                         continue;
                     }
                     if shapes[a].hits_shape_by_gjk(&poses[a], &shapes[b], &poses[b])
