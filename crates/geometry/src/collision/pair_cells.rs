@@ -409,7 +409,13 @@ impl CellProver<'_> {
         let speed: Vec<f32> = (0..model.joints().len())
             .map(|k| (model.joint_value(k, &corner) - model.joint_value(k, &centre)).abs())
             .collect();
-        let poses = model.link_poses(Pose::IDENTITY, &centre);
+        // The pairs' two links posed (the rest of the model is not needed).
+        let links = |(p, r): (u16, u16)| [p, r].map(|s| self.shapes[s as usize].link);
+        debug_assert!(pairs.iter().all(|&pr| links(pr) == links(pairs[0])));
+        let mut poses = vec![Pose::IDENTITY; model.links().len()];
+        for link in links(pairs[0]) {
+            poses[link] = model.link_pose_by_id(Pose::IDENTITY, &centre, link);
+        }
         let first = (cells.last_failed.load(Ordering::Relaxed) as usize).min(pairs.len() - 1);
         let order = std::iter::once(first).chain((0..pairs.len()).filter(|&k| k != first));
         for k in order {
