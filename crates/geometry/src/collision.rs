@@ -420,8 +420,11 @@ struct FixedJoints {
     template: Vec<f32>,
     moving_dofs: Vec<usize>,
     moving_dof: Vec<bool>,
-    moving_link: Vec<bool>,
+    /// The joints whose child link moves, parents first.
+    moving_joints: Vec<usize>,
     link_poses: Vec<Pose>,
+    /// The world centres of the links' spheres in the template.
+    link_centres: Vec<Vector>,
     shape_poses: Vec<Pose>,
     shape_aabbs: Vec<Aabb>,
     moving_shapes: Vec<u16>,
@@ -498,7 +501,10 @@ impl CollisionChecker {
         // The unmoving part's collisions, found once: its shapes against the obstacles and
         // each other (not the held objects: they move with the hand).
         let mut static_hits = Vec::new();
-        let (link_poses, shape_poses, shape_aabbs) = SCRATCH.with(|scratch| {
+        let moving_joints = (0..model.joints().len())
+            .filter(|&j| moving_link[j + 1])
+            .collect();
+        let (link_poses, link_centres, shape_poses, shape_aabbs) = SCRATCH.with(|scratch| {
             let mut s = scratch.borrow_mut();
             self.pose_into(template, &mut s);
             let parts = (&unmoving_shapes[..], &unmoving_groups[..]);
@@ -506,14 +512,16 @@ impl CollisionChecker {
                 static_hits.push(h);
                 false
             });
-            (s.links.clone(), s.poses.clone(), s.aabbs.clone())
+            let posed = (s.links.clone(), s.centres.clone());
+            (posed.0, posed.1, s.poses.clone(), s.aabbs.clone())
         });
         self.fixed = Some(Arc::new(FixedJoints {
             template: template.to_vec(),
             moving_dofs: moving_dofs.to_vec(),
             moving_dof,
-            moving_link,
+            moving_joints,
             link_poses,
+            link_centres,
             shape_poses,
             shape_aabbs,
             moving_shapes,
@@ -754,28 +762,29 @@ impl CollisionChecker {
     ) {
         let model = &self.agent.model;
         let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
-        let links = &mut s.links;
+        let (links, centres) = (&mut s.links, &mut s.centres);
+        let spheres = &self.agent.link_spheres;
         let (moving, groups): (&[u16], &[self_collision::PairGroup]) = match fixed {
             Some(f) => {
                 links.clear();
                 links.extend_from_slice(&f.link_poses);
-                for (j, joint) in model.joints().iter().enumerate() {
-                    if f.moving_link[j + 1] {
-                        links[j + 1] =
-                            links[joint.parent] * joint.transform(model.joint_value(j, q));
-                    }
+                centres.clear();
+                centres.extend_from_slice(&f.link_centres);
+                let joints = model.joints();
+                for &j in &f.moving_joints {
+                    let joint = &joints[j];
+                    links[j + 1] = links[joint.parent] * joint.transform(model.joint_value(j, q));
+                    centres[j + 1] = links[j + 1] * spheres[j + 1].0;
                 }
                 (&f.moving_shapes, &f.moving_groups)
             }
             None => {
                 model.link_poses_into(self.base, q, links);
+                centres.clear();
+                centres.extend(links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
                 (&self.agent.all_shapes, &self.agent.groups)
             }
         };
-        let spheres = &self.agent.link_spheres;
-        s.centres.clear();
-        s.centres
-            .extend(s.links.iter().zip(spheres).map(|(l, (c, _))| *l * *c));
         s.links_moved();
         (moving, groups, fixed)
     }
