@@ -574,10 +574,11 @@ fn certified(
 }
 
 /// `path` certified edge by edge, each edge that fails replaced by the path of a search
-/// between its ends (certified itself, with no repair inside); `None` where such a search
-/// fails. A tree path's failing edge, as a rule, grazes a thin obstacle that the discrete
-/// checks stepped over: a new search between its ends goes round it, where a search from
-/// scratch would build the whole tree again.
+/// between its ends (certified itself, with no repair inside, within what is left of the
+/// search's time: `params`); `Ok(None)` where such a search fails, its time limit as the error.
+/// A tree path's failing edge, as a rule, grazes a thin obstacle that the discrete checks
+/// stepped over: a new search between its ends goes round it, where a search from scratch would
+/// build the whole tree again.
 fn repaired(
     space: &JointSpace,
     path: &JointPath,
@@ -586,7 +587,7 @@ fn repaired(
     certify: &mut Option<EdgeCertifier<'_>>,
     rng: &mut fastrand::Rng,
     stats: &mut RrtStats,
-) -> Option<JointPath> {
+) -> Result<Option<JointPath>, RrtError> {
     let mut out = vec![path.waypoints[0].clone()];
     for w in path.waypoints.windows(2) {
         let one = JointPath {
@@ -603,9 +604,13 @@ fn repaired(
             Ok((_, st)) | Err((_, st)) => st,
         };
         (stats.checks, stats.nodes) = (stats.checks + st.checks, stats.nodes + st.nodes);
-        out.extend(found.ok()?.0.waypoints.into_iter().skip(1));
+        match found {
+            Ok((sub, _)) => out.extend(sub.waypoints.into_iter().skip(1)),
+            Err((e @ RrtError::TimeLimit(_), _)) => return Err(e),
+            Err(_) => return Ok(None),
+        }
     }
-    Some(JointPath { waypoints: out })
+    Ok(Some(JointPath { waypoints: out }))
 }
 
 /// Searches with new trees after a path fails its certification, at most this many times.
@@ -724,8 +729,20 @@ fn plan_once(
                         // tree's own path, whose edges are short, its failing edges searched
                         // for again where `repair`.
                         let fallback = if repair {
-                            let ends = (fine, params);
-                            repaired(space, &raw, ends, valid, &mut certify, rng, &mut stats)
+                            // The repairs share this search's time.
+                            let left = RrtParams {
+                                time_limit: params.time_limit.saturating_sub(began.elapsed()),
+                                ..params.clone()
+                            };
+                            let ends = (fine, &left);
+                            match repaired(space, &raw, ends, valid, &mut certify, rng, &mut stats)
+                            {
+                                Ok(p) => p,
+                                // Stopped by the time left: this search's limit.
+                                Err(_) => {
+                                    return Err((RrtError::TimeLimit(params.time_limit), stats));
+                                }
+                            }
                         } else {
                             let ok = certified(
                                 space,
