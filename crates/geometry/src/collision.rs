@@ -395,6 +395,14 @@ impl Scratch {
     }
 }
 
+/// What a posing leaves to the checks: the shapes and the link pairs that may move (all of
+/// them without the cache of [`CollisionChecker::set_fixed_joints`]), and the cache used.
+type Posed<'a> = (
+    &'a [u16],
+    &'a [self_collision::PairGroup],
+    Option<&'a FixedJoints>,
+);
+
 thread_local! {
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
@@ -512,8 +520,12 @@ impl CollisionChecker {
                 static_hits.push(h);
                 false
             });
-            let posed = (s.links.clone(), s.centres.clone());
-            (posed.0, posed.1, s.poses.clone(), s.aabbs.clone())
+            (
+                s.links.clone(),
+                s.centres.clone(),
+                s.poses.clone(),
+                s.aabbs.clone(),
+            )
         });
         self.fixed = Some(Arc::new(FixedJoints {
             template: template.to_vec(),
@@ -709,17 +721,8 @@ impl CollisionChecker {
     }
 
     /// Poses the agent's links and shapes for `q` into `s`, through the cache of
-    /// [`CollisionChecker::set_fixed_joints`] where `q` matches it. Returns the shapes and the
-    /// link pairs that may move (all of them without the cache) and the cache used.
-    fn pose_into<'a>(
-        &'a self,
-        q: &[f32],
-        s: &mut Scratch,
-    ) -> (
-        &'a [u16],
-        &'a [self_collision::PairGroup],
-        Option<&'a FixedJoints>,
-    ) {
+    /// [`CollisionChecker::set_fixed_joints`] where `q` matches it.
+    fn pose_into<'a>(&'a self, q: &[f32], s: &mut Scratch) -> Posed<'a> {
         let posed = self.pose_links_into(q, s);
         let shapes = &self.agent.shapes;
         match posed.2 {
@@ -751,15 +754,7 @@ impl CollisionChecker {
 
     /// [`CollisionChecker::pose_into`] for the links alone (and their spheres' centres): the
     /// shapes' poses are left stale, to be made by [`Scratch::pose_shape`] where needed.
-    fn pose_links_into<'a>(
-        &'a self,
-        q: &[f32],
-        s: &mut Scratch,
-    ) -> (
-        &'a [u16],
-        &'a [self_collision::PairGroup],
-        Option<&'a FixedJoints>,
-    ) {
+    fn pose_links_into<'a>(&'a self, q: &[f32], s: &mut Scratch) -> Posed<'a> {
         let model = &self.agent.model;
         let fixed = self.fixed.as_deref().filter(|f| f.matches(q));
         let (links, centres) = (&mut s.links, &mut s.centres);

@@ -573,16 +573,16 @@ fn certified(
     })
 }
 
-/// `path` certified edge by edge, each edge that fails replaced by the path of a search
-/// between its ends (certified itself, with no repair inside, within what is left of the
-/// search's time: `params`); `Ok(None)` where such a search fails, its time limit as the error.
-/// A tree path's failing edge, as a rule, grazes a thin obstacle that the discrete checks
-/// stepped over: a new search between its ends goes round it, where a search from scratch would
-/// build the whole tree again.
+/// `path` certified edge by edge; where `repair`, each edge that fails replaced by the path
+/// of a search between its ends (certified itself, with no repair inside, within what is left
+/// of the search's time: `params`). `Ok(None)` where an edge fails and is not repaired, the
+/// time limit as the error. A tree path's failing edge, as a rule, grazes a thin obstacle that
+/// the discrete checks stepped over: a new search between its ends goes round it, where a search
+/// from scratch would build the whole tree again.
 fn repaired(
     space: &JointSpace,
     path: &JointPath,
-    (fine, params): (f32, &RrtParams),
+    (fine, params, repair): (f32, &RrtParams, bool),
     valid: &mut dyn FnMut(&[f32]) -> bool,
     certify: &mut Option<EdgeCertifier<'_>>,
     rng: &mut fastrand::Rng,
@@ -597,6 +597,9 @@ fn repaired(
         if certified(space, &one, fine, &mut v, certify, &mut stats.checks) {
             out.push(w[1].clone());
             continue;
+        }
+        if !repair {
+            return Ok(None);
         }
         let sub = certify.as_mut().map(|c| &mut **c as EdgeCertifier<'_>);
         let found = plan_once(space, &w[0], &w[1], valid, sub, params, rng, false);
@@ -727,42 +730,29 @@ fn plan_once(
                     ) {
                         // A shortcut cut a corner between the coarse checks: fall back to the
                         // tree's own path, whose edges are short, its failing edges searched
-                        // for again where `repair`.
-                        let fallback = if repair {
-                            // The repairs share this search's time.
-                            let left = RrtParams {
-                                time_limit: params.time_limit.saturating_sub(began.elapsed()),
-                                ..params.clone()
-                            };
-                            let ends = (fine, &left);
-                            match repaired(space, &raw, ends, valid, &mut certify, rng, &mut stats)
-                            {
-                                Ok(p) => p,
-                                // Stopped by the time left: this search's limit.
-                                Err(_) => {
-                                    return Err((RrtError::TimeLimit(params.time_limit), stats));
-                                }
-                            }
-                        } else {
-                            let ok = certified(
-                                space,
-                                &raw,
-                                fine,
-                                &mut valid,
-                                &mut certify,
-                                &mut stats.checks,
-                            );
-                            ok.then_some(raw)
+                        // for again where `repair`, in the time left to this search.
+                        let left = RrtParams {
+                            time_limit: params.time_limit.saturating_sub(began.elapsed()),
+                            ..params.clone()
                         };
-                        match fallback {
-                            Some(p) => path = p,
-                            None => {
-                                return Err((
-                                    RrtError::Certification(params.certify_factor),
-                                    stats,
-                                ));
+                        let how = (fine, &left, repair);
+                        path = match repaired(
+                            space,
+                            &raw,
+                            how,
+                            valid,
+                            &mut certify,
+                            rng,
+                            &mut stats,
+                        ) {
+                            Ok(Some(p)) => p,
+                            Ok(None) => {
+                                let e = RrtError::Certification(params.certify_factor);
+                                return Err((e, stats));
                             }
-                        }
+                            // Stopped by the time left: this search's limit.
+                            Err(_) => return Err((RrtError::TimeLimit(params.time_limit), stats)),
+                        };
                     }
                 }
                 return Ok((path, stats));

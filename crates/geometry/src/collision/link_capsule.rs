@@ -41,6 +41,20 @@ impl LinkCapsule {
         (*pose * self.a, *pose * self.b)
     }
 
+    /// A lower bound on the distance between this capsule, its link at `pose`, and `other`,
+    /// its link at `other_pose` (negative where they overlap).
+    pub(super) fn gap(&self, pose: &Pose, other: &LinkCapsule, other_pose: &Pose) -> f32 {
+        let ((pa, qa), (pb, qb)) = (self.at(pose), other.at(other_pose));
+        segment_distance(pa, qa, pb, qb) - self.radius - other.radius
+    }
+
+    /// A lower bound on the distance between this capsule, its link at `pose`, and the ball
+    /// (`centre`, `radius`).
+    pub(super) fn ball_gap(&self, pose: &Pose, centre: Vector, radius: f32) -> f32 {
+        let (p, q) = self.at(pose);
+        point_segment_distance(centre, p, q) - self.radius - radius
+    }
+
     fn volume(&self) -> f32 {
         let r = self.radius;
         std::f32::consts::PI * r * r * ((self.b - self.a).length() + 4.0 / 3.0 * r)
@@ -108,7 +122,7 @@ fn principal_axis(points: &[Vector], centre: Vector) -> Vector {
 /// The distance between segments `p1`-`q1` and `p2`-`q2` (Ericson, Real-Time Collision
 /// Detection, 5.1.9), in double precision: rounding moves the closest points it finds by far
 /// less than [`MARGIN`], even for segments all but parallel.
-pub(super) fn segment_distance(p1: Vector, q1: Vector, p2: Vector, q2: Vector) -> f32 {
+fn segment_distance(p1: Vector, q1: Vector, p2: Vector, q2: Vector) -> f32 {
     let wide = |v: Vector| [v.x as f64, v.y as f64, v.z as f64];
     let (w1, v1, w2, v2) = (wide(p1), wide(q1), wide(p2), wide(q2));
     let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
@@ -148,7 +162,7 @@ pub(super) fn segment_distance(p1: Vector, q1: Vector, p2: Vector, q2: Vector) -
 }
 
 /// The distance from point `p` to the segment `a`-`b`.
-pub(super) fn point_segment_distance(p: Vector, a: Vector, b: Vector) -> f32 {
+fn point_segment_distance(p: Vector, a: Vector, b: Vector) -> f32 {
     let ab = b - a;
     let len2 = ab.length_squared();
     let t = if len2 > 0.0 {

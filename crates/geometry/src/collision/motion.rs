@@ -446,10 +446,7 @@ impl CollisionChecker {
     /// the agent.
     fn bodies(&self, pair: Pair, groups: &[PairGroup]) -> (Body, Option<Body>) {
         let shapes = &self.agent.shapes;
-        let sphere = |l: usize| {
-            let (c, r) = self.agent.link_spheres[l];
-            (l, c, r)
-        };
+        let sphere = |l: usize| self.link_body(l);
         match pair {
             Pair::Obstacle(i, _) => (body(&shapes[i as usize]), None),
             Pair::Links(g) => {
@@ -462,6 +459,12 @@ impl CollisionChecker {
             Pair::HeldShape(k, i) => (held_body(self.held_k(k)), Some(body(&shapes[i as usize]))),
             Pair::HeldObjects(k, l) => (held_body(self.held_k(k)), Some(held_body(self.held_k(l)))),
         }
+    }
+
+    /// Link `l` as a body: its sphere.
+    fn link_body(&self, l: usize) -> Body {
+        let (centre, radius) = self.agent.link_spheres[l];
+        (l, centre, radius)
     }
 
     /// Poses the agent shapes of `pair` in `s` where the links moved since.
@@ -507,13 +510,9 @@ impl CollisionChecker {
             }
         }
         if self.self_collision {
-            let spheres = &self.agent.link_spheres;
             for (g, pg) in groups.iter().enumerate() {
                 let (a, b) = (pg.a as usize, pg.b as usize);
-                let (ba, bb) = (
-                    (a, spheres[a].0, spheres[a].1),
-                    (b, spheres[b].0, spheres[b].1),
-                );
+                let (ba, bb) = (self.link_body(a), self.link_body(b));
                 let rate = reach.rate(speed, ba, Some(bb));
                 // Too far apart to meet in the whole motion (their balls, then capsules), or
                 // proven apart all along it by their cells.

@@ -11,7 +11,7 @@ use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
 use super::intersects;
-use super::link_capsule::{LinkCapsule, point_segment_distance, segment_distance};
+use super::link_capsule::LinkCapsule;
 use super::motion::{JointReach, body, lower_bound_distance};
 use super::pair_cells::{CellProver, PairCells};
 use crate::agent::{AgentModel, ModelError};
@@ -179,8 +179,7 @@ impl ShapeEntry {
         let (Some(ca), Some(cb)) = (&self.capsule, &other.capsule) else {
             return f32::NEG_INFINITY;
         };
-        let ((pa, qa), (pb, qb)) = (ca.at(link), cb.at(other_link));
-        segment_distance(pa, qa, pb, qb) - ca.radius - cb.radius
+        ca.gap(link, cb, other_link)
     }
 
     /// Points in its link's frame whose convex hull holds the shape: a polyhedron's vertices,
@@ -557,8 +556,7 @@ impl SelfCollisionModel {
         let (Some(ca), Some(cb)) = capsules else {
             return f32::NEG_INFINITY;
         };
-        let ((pa, qa), (pb, qb)) = (ca.at(&links[a]), cb.at(&links[b]));
-        segment_distance(pa, qa, pb, qb) - ca.radius - cb.radius
+        ca.gap(&links[a], cb, &links[b])
     }
 
     /// A lower bound on the distance between link `l` at world pose `link` and a ball
@@ -573,8 +571,7 @@ impl SelfCollisionModel {
         let Some(c) = &self.link_capsules[l] else {
             return f32::NEG_INFINITY;
         };
-        let (p, q) = c.at(link);
-        point_segment_distance(centre, p, q) - c.radius - radius
+        c.ball_gap(link, centre, radius)
     }
 
     /// Whether the links of `group` are proven apart in configuration `q` by their cells
