@@ -284,6 +284,6 @@ fn pair_cells_never_free_a_collision_of_the_real_pr2() {
         &model,
         (&with, &checker(false)),
         (&template, &arm),
-        (5, 400),
+        (5, 4000),
     );
 }
