@@ -11,9 +11,12 @@
 //! shapes can move relative to each other while the two joints stay in the cell (each joint's
 //! half-width times the shapes' greatest distance from its axis), with [`CELL_MARGIN`] to
 //! spare. A cell's answer depends on the cell alone, so checks answer the same whatever order
-//! they come in; where no cell is proven the pair is tested exactly, as before. A pair splits
-//! at most [`MAX_SPLITS`] cells (8 MiB), so a run that wanders everywhere keeps its memory:
-//! past that, a cell not proven is not split but tested exactly.
+//! they come in; where no cell is proven the pair is tested exactly, as before. A cell not
+//! proven tells its smaller cells which shape pairs it did not prove: the others are apart
+//! over the whole cell, so a smaller cell proves only those (of the upper arm's 12 pieces and
+//! the forearm roll link's 13, a few instead of 156). A pair splits at most [`MAX_SPLITS`]
+//! cells (14 MiB), so a run that wanders everywhere keeps its memory: past that, a cell not
+//! proven is not split but tested exactly.
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU8, AtomicU32, Ordering};
@@ -42,7 +45,8 @@ const CELL_MARGIN: f32 = 1e-4;
 const MAX_CELLS_PER_DOF: f32 = 1024.0;
 const MAX_CELLS: u32 = 1 << 16;
 
-/// The most cells one pair splits (each into `SPLIT` x `SPLIT`, 32 bytes a cell): 8 MiB.
+/// The most cells one pair splits (each into `SPLIT` x `SPLIT`, 48 bytes a cell, with at
+/// most [`MAX_KEPT_PAIRS`] pair indices): 14 MiB.
 const MAX_SPLITS: u32 = 1 << 16;
 
 /// The most of the largest cells a motion's check looks at (a longer motion is followed by
@@ -95,8 +99,21 @@ impl CellAxis {
 #[derive(Debug, Default)]
 struct Cell {
     state: AtomicU8,
-    smaller: OnceLock<Box<[Cell]>>,
+    smaller: OnceLock<Smaller>,
 }
+
+/// A cell's smaller cells, and the shape pairs its proof did not prove apart (indices into
+/// the pair's list): the only ones the smaller cells, inside it, need to prove. None where
+/// there were more than [`MAX_KEPT_PAIRS`]: the smaller cells take the list the cell had.
+#[derive(Debug)]
+struct Smaller {
+    cells: Box<[Cell]>,
+    pairs: Option<Box<[u16]>>,
+}
+
+/// The most shape pairs a split cell keeps for its smaller cells (bounds the memory a split
+/// takes; a longer list is not kept, see [`Smaller`]).
+const MAX_KEPT_PAIRS: usize = 16;
 
 fn new_cells(n: u32) -> Box<[Cell]> {
     (0..n).map(|_| Cell::default()).collect()
@@ -107,6 +124,8 @@ fn new_cells(n: u32) -> Box<[Cell]> {
 pub(super) struct PairCells {
     axes: [CellAxis; 2],
     largest: Box<[Cell]>,
+    /// Every shape pair's index, the list the largest cells prove.
+    all: Box<[u16]>,
     /// The shape pair that last failed a proof, tried first in the next (neighbouring cells
     /// fail alike); the order changes how soon a proof fails, not its answer.
     last_failed: AtomicU32,
@@ -116,18 +135,22 @@ pub(super) struct PairCells {
 }
 
 impl Cell {
-    /// The cells `self` splits into, split now if not yet and `cells` may split more.
-    fn split<'c>(&'c self, cells: &PairCells) -> Option<&'c [Cell]> {
-        if let Some(s) = self.smaller.get() {
-            return Some(s);
+    /// Splits `self` into smaller cells that need to prove only the shape pairs `unproven`,
+    /// unless split already or `cells` may split no more.
+    fn split(&self, cells: &PairCells, unproven: Vec<u16>) {
+        if self.smaller.get().is_some() {
+            return;
         }
         // Loaded first, so that the count stops near the cap instead of wrapping around.
         if cells.splits.load(Ordering::Relaxed) >= MAX_SPLITS
             || cells.splits.fetch_add(1, Ordering::Relaxed) >= MAX_SPLITS
         {
-            return None;
+            return;
         }
-        Some(self.smaller.get_or_init(|| new_cells(SPLIT * SPLIT)))
+        self.smaller.get_or_init(|| Smaller {
+            cells: new_cells(SPLIT * SPLIT),
+            pairs: (unproven.len() <= MAX_KEPT_PAIRS).then(|| unproven.into_boxed_slice()),
+        });
     }
 }
 
@@ -179,7 +202,8 @@ impl Segment {
 enum Look<'c> {
     Free,
     Unproven,
-    Smaller(&'c [Cell]),
+    /// Look at the smaller cells, which prove these of the shape pairs.
+    Smaller(&'c [Cell], &'c [u16]),
 }
 
 /// What a proof needs of the model: its links, shapes and joint reach.
@@ -219,7 +243,7 @@ impl CellProver<'_> {
             return None;
         }
         let n = axes.map(|a| a.4 as u32);
-        if n[0] * n[1] > MAX_CELLS {
+        if n[0] * n[1] > MAX_CELLS || pairs.len() > usize::from(u16::MAX) {
             return None;
         }
         let axes = axes.map(|(dof, lo, hi, wraps, n)| CellAxis {
@@ -232,6 +256,7 @@ impl CellProver<'_> {
         Some(PairCells {
             axes,
             largest: new_cells(n[0] * n[1]),
+            all: (0..pairs.len() as u16).collect(),
             last_failed: AtomicU32::new(0),
             splits: AtomicU32::new(0),
         })
@@ -256,14 +281,15 @@ impl CellProver<'_> {
         let (Some(s), Some(t)) = (a.position(q[a.dof]), b.position(q[b.dof])) else {
             return false;
         };
-        let mut list: &[Cell] = &cells.largest;
+        let (mut list, mut unproven): (&[Cell], &[u16]) = (&cells.largest, &cells.all);
         for level in 0..LEVELS {
             let scale = SPLIT.pow(level) as f32;
             let at = ((s * scale) as i64, (t * scale) as i64);
-            match self.look(cells, &list[cells.sibling(at, level)], (at, level), pairs) {
+            let cell = &list[cells.sibling(at, level)];
+            match self.look(cells, cell, (at, level), (pairs, unproven)) {
                 Look::Free => return true,
                 Look::Unproven => return false,
-                Look::Smaller(smaller) => list = smaller,
+                Look::Smaller(smaller, left) => (list, unproven) = (smaller, left),
             }
         }
         false
@@ -312,7 +338,7 @@ impl CellProver<'_> {
                 !segment.meets((i, j), 1)
                     || self.covers(
                         cells,
-                        pairs,
+                        (pairs, &cells.all),
                         &cells.largest[cells.sibling((i, j), 0)],
                         ((i, j), 0),
                         &segment,
@@ -326,15 +352,15 @@ impl CellProver<'_> {
     fn covers(
         &self,
         cells: &PairCells,
-        pairs: &[(u16, u16)],
+        (pairs, unproven): (&[(u16, u16)], &[u16]),
         cell: &Cell,
         (at, level): ((i64, i64), u32),
         segment: &Segment,
     ) -> bool {
-        let smaller = match self.look(cells, cell, (at, level), pairs) {
+        let (smaller, left) = match self.look(cells, cell, (at, level), (pairs, unproven)) {
             Look::Free => return true,
             Look::Unproven => return false,
-            Look::Smaller(smaller) => smaller,
+            Look::Smaller(smaller, left) => (smaller, left),
         };
         let (split, scale) = (SPLIT as i64, SPLIT.pow(level));
         (0..split).all(|di| {
@@ -343,7 +369,7 @@ impl CellProver<'_> {
                 !segment.meets(child, scale * SPLIT)
                     || self.covers(
                         cells,
-                        pairs,
+                        (pairs, left),
                         &smaller[cells.sibling(child, level + 1)],
                         (child, level + 1),
                         segment,
@@ -352,55 +378,52 @@ impl CellProver<'_> {
         })
     }
 
-    /// What `cell` (at unwrapped indices `at` of level `level`) says: proven free, not (a
-    /// smallest cell, or one that may not split), or look at its smaller cells.
+    /// What `cell` (at unwrapped indices `at` of level `level`) says, proven now if not yet
+    /// tried, of the shape pairs `unproven` (those its larger cells did not prove): proven
+    /// free, not (a smallest cell, or one that may not split), or look at its smaller cells.
     fn look<'c>(
         &self,
         cells: &PairCells,
         cell: &'c Cell,
         (at, level): ((i64, i64), u32),
-        pairs: &[(u16, u16)],
+        (pairs, unproven): (&[(u16, u16)], &'c [u16]),
     ) -> Look<'c> {
-        match self.state(cells, cell, at, SPLIT.pow(level), pairs) {
-            FREE => Look::Free,
-            _ if level + 1 == LEVELS => Look::Unproven,
-            _ => cell.split(cells).map_or(Look::Unproven, Look::Smaller),
-        }
-    }
-
-    /// The state of `cell` (at unwrapped indices `at` of the cells `scale` times smaller
-    /// than the largest), proven now if not yet tried.
-    fn state(
-        &self,
-        cells: &PairCells,
-        cell: &Cell,
-        at: (i64, i64),
-        scale: u32,
-        pairs: &[(u16, u16)],
-    ) -> u8 {
-        match cell.state.load(Ordering::Relaxed) {
-            UNTRIED => {
-                let state = if self.prove(cells, at, scale, pairs) {
-                    FREE
-                } else {
-                    NOT_PROVEN
-                };
-                cell.state.store(state, Ordering::Relaxed);
-                state
+        let last = level + 1 == LEVELS;
+        if cell.state.load(Ordering::Acquire) == UNTRIED {
+            let left = self.prove(cells, at, SPLIT.pow(level), (pairs, unproven), last);
+            if left.is_empty() {
+                cell.state.store(FREE, Ordering::Release);
+                return Look::Free;
             }
-            state => state,
+            if !last {
+                cell.split(cells, left);
+            }
+            // After the split: a cell seen not proven has its smaller cells, or may not split.
+            cell.state.store(NOT_PROVEN, Ordering::Release);
+        }
+        match (cell.state.load(Ordering::Acquire), cell.smaller.get()) {
+            (FREE, _) => Look::Free,
+            (_, Some(s)) if !last => {
+                Look::Smaller(&s.cells, s.pairs.as_deref().unwrap_or(unproven))
+            }
+            _ => Look::Unproven,
         }
     }
 
-    /// Whether every pair stays at least [`CELL_MARGIN`] apart over cell `(i, j)` of the
-    /// cells `scale` times smaller than the largest.
+    /// The shape pairs of `unproven` not proven to stay at least [`CELL_MARGIN`] apart over
+    /// cell `(i, j)` of the cells `scale` times smaller than the largest: all of them, for the
+    /// smaller cells to prove, or (`first_only`, a cell that does not split) the first found.
     fn prove(
         &self,
         cells: &PairCells,
         (i, j): (i64, i64),
         scale: u32,
-        pairs: &[(u16, u16)],
-    ) -> bool {
+        (pairs, unproven): (&[(u16, u16)], &[u16]),
+        first_only: bool,
+    ) -> Vec<u16> {
+        if unproven.is_empty() {
+            return Vec::new();
+        }
         let model = self.model;
         let [a, b] = &cells.axes;
         let mut centre = model.default_configuration().into_vec();
@@ -418,18 +441,25 @@ impl CellProver<'_> {
         for link in links(pairs[0]) {
             poses[link] = model.link_pose_by_id(Pose::IDENTITY, &centre, link);
         }
-        let first = (cells.last_failed.load(Ordering::Relaxed) as usize).min(pairs.len() - 1);
-        let order = std::iter::once(first).chain((0..pairs.len()).filter(|&k| k != first));
-        for k in order {
-            let (p, r) = pairs[k];
+        // The pair that failed last first: where one fails, it is likely that one.
+        let last = cells.last_failed.load(Ordering::Relaxed) as u16;
+        let first = unproven.iter().position(|&k| k == last).unwrap_or(0);
+        let order = std::iter::once(first).chain((0..unproven.len()).filter(|&k| k != first));
+        let mut left = Vec::new();
+        for k in order.map(|k| unproven[k]) {
+            let (p, r) = pairs[k as usize];
             let (ep, er) = (&self.shapes[p as usize], &self.shapes[r as usize]);
             let motion = self.reach.rate(&speed, body(ep), Some(body(er)));
             if !proven_apart((ep, er), &poses, motion + CELL_MARGIN) {
                 cells.last_failed.store(k as u32, Ordering::Relaxed);
-                return false;
+                left.push(k);
+                if first_only {
+                    break;
+                }
             }
         }
-        true
+        left.sort_unstable();
+        left
     }
 }
 
