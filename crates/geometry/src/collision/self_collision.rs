@@ -372,6 +372,18 @@ impl SelfCollisionModel {
         for (i, e) in shapes.iter().enumerate() {
             by_link[e.link].push(i);
         }
+        let link_capsules: Vec<Option<LinkCapsule>> = by_link
+            .iter()
+            .map(|ids| {
+                let points: Vec<Vector> = ids.iter().flat_map(|&i| shapes[i].points()).collect();
+                LinkCapsule::enclosing(&points)
+            })
+            .collect();
+        let bodies = Bodies {
+            shapes: &shapes,
+            by_link: &by_link,
+            capsules: &link_capsules,
+        };
         // Link-level pair status: None = check, Some(reason) = ignore.
         let mut status: Vec<Option<AllowedReason>> = vec![None; nl * nl];
         let key = |a: usize, b: usize| a.min(b) * nl + a.max(b);
@@ -408,7 +420,7 @@ impl SelfCollisionModel {
             model.link_poses_into(Pose::IDENTITY, q, poses);
             out.clear();
             for &(a, b) in &candidate_links {
-                out.push(links_collide(&shapes, &by_link, poses, a, b));
+                out.push(bodies.collide(poses, a, b));
             }
         };
         let mut hits = Vec::new();
@@ -420,7 +432,7 @@ impl SelfCollisionModel {
             }
         }
         let always = always_colliding(&model, &candidate_links, options, |poses, a, b| {
-            links_collide(&shapes, &by_link, poses, a, b)
+            bodies.collide(poses, a, b)
         });
         for (k, &(a, b)) in candidate_links.iter().enumerate() {
             if always[k] && status[key(a, b)].is_none() {
@@ -503,13 +515,6 @@ impl SelfCollisionModel {
                     .map(|&i| (ball(i).0 - centre).length() + ball(i).1)
                     .fold(0.0f32, f32::max);
                 (centre, radius)
-            })
-            .collect();
-        let link_capsules = by_link
-            .iter()
-            .map(|ids| {
-                let points: Vec<Vector> = ids.iter().flat_map(|&i| shapes[i].points()).collect();
-                LinkCapsule::enclosing(&points)
             })
             .collect();
         let mut allowed = Vec::new();
@@ -773,29 +778,38 @@ fn always_colliding(
         .collect()
 }
 
-/// Whether links `a` and `b` (their shapes, `by_link` indices into `shapes`) collide with the
-/// links at `poses`.
-fn links_collide(
-    shapes: &[ShapeEntry],
-    by_link: &[Vec<usize>],
-    poses: &[Pose],
-    a: usize,
-    b: usize,
-) -> bool {
-    for ca in by_link[a].iter().map(|&i| &shapes[i]) {
-        let pa = poses[a] * ca.local_pose;
-        for cb in by_link[b].iter().map(|&i| &shapes[i]) {
-            let pb = poses[b] * cb.local_pose;
-            // The exact test alone (no bounding boxes), as the pairs to leave out were always
-            // found: which pairs a model checks does not change with how fast checks are.
-            if (pa.translation - pb.translation).length() <= ca.radius + cb.radius
-                && intersects(&pa, &*ca.shape.0, &pb, &*cb.shape.0)
-            {
-                return true;
+/// A model's shapes by link, and each link's capsule, for finding the pairs to leave out.
+struct Bodies<'a> {
+    shapes: &'a [ShapeEntry],
+    /// Per link, its shapes' indices into `shapes`.
+    by_link: &'a [Vec<usize>],
+    capsules: &'a [Option<LinkCapsule>],
+}
+
+impl Bodies<'_> {
+    /// Whether links `a` and `b` collide with the links at `poses`.
+    fn collide(&self, poses: &[Pose], a: usize, b: usize) -> bool {
+        if let (Some(ca), Some(cb)) = (&self.capsules[a], &self.capsules[b])
+            && ca.gap(&poses[a], cb, &poses[b]) > 0.0
+        {
+            return false; // the links' capsules, which hold their shapes, are apart
+        }
+        for ca in self.by_link[a].iter().map(|&i| &self.shapes[i]) {
+            let pa = poses[a] * ca.local_pose;
+            for cb in self.by_link[b].iter().map(|&i| &self.shapes[i]) {
+                let pb = poses[b] * cb.local_pose;
+                // Exact tests behind bounds that hold the shapes (no tolerances), as the pairs
+                // to leave out were always found: which pairs a model checks does not change
+                // with how fast checks are.
+                if (pa.translation - pb.translation).length() <= ca.radius + cb.radius
+                    && intersects(&pa, &*ca.shape.0, &pb, &*cb.shape.0)
+                {
+                    return true;
+                }
             }
         }
+        false
     }
-    false
 }
 
 #[cfg(test)]
