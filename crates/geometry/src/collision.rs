@@ -31,7 +31,7 @@
 
 use std::cell::RefCell;
 use std::fmt;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Mat3, Pose, Vector};
@@ -78,6 +78,38 @@ pub struct StaticObstacles {
     obstacles: Vec<Obstacle>,
     aabbs: Vec<Aabb>,
     bvh: Option<Bvh>,
+    /// The unmoving parts of agents last checked against these obstacles (see
+    /// [`CollisionChecker::set_fixed_joints`]).
+    fixed: FixedParts,
+}
+
+/// The last [`FIXED_PARTS_KEPT`] unmoving parts made for one set of obstacles: a task plans
+/// many motions of one arm, each with a checker of its own, the rest of the robot as it was.
+#[derive(Default)]
+struct FixedParts(Mutex<Vec<Arc<FixedJoints>>>);
+
+/// How many unmoving parts a set of obstacles keeps (a few kilobytes each).
+const FIXED_PARTS_KEPT: usize = 8;
+
+impl Clone for FixedParts {
+    fn clone(&self) -> FixedParts {
+        FixedParts::default()
+    }
+}
+
+impl FixedParts {
+    fn find(&self, wanted: impl Fn(&FixedJoints) -> bool) -> Option<Arc<FixedJoints>> {
+        let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        kept.iter().rev().find(|f| wanted(f)).cloned()
+    }
+
+    fn keep(&self, f: Arc<FixedJoints>) {
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if kept.len() == FIXED_PARTS_KEPT {
+            kept.remove(0);
+        }
+        kept.push(f);
+    }
 }
 
 impl fmt::Debug for StaticObstacles {
@@ -101,6 +133,7 @@ impl StaticObstacles {
             obstacles,
             aabbs,
             bvh,
+            fixed: FixedParts::default(),
         }
     }
 
@@ -425,6 +458,11 @@ pub struct CollisionChecker {
 /// [`CollisionChecker::set_fixed_joints`]).
 #[derive(Debug)]
 struct FixedJoints {
+    /// What it was made for besides the template: the agent, its base and whether
+    /// self-collisions are checked.
+    agent: Arc<SelfCollisionModel>,
+    base: Pose,
+    self_collision: bool,
     template: Vec<f32>,
     moving_dofs: Vec<usize>,
     moving_dof: Vec<bool>,
@@ -443,6 +481,15 @@ struct FixedJoints {
 }
 
 impl FixedJoints {
+    /// Whether it serves `checker` for template `template` with `moving_dofs` moving.
+    fn serves(&self, checker: &CollisionChecker, template: &[f32], moving_dofs: &[usize]) -> bool {
+        Arc::ptr_eq(&self.agent, &checker.agent)
+            && self.base == checker.base
+            && self.self_collision == checker.self_collision
+            && self.moving_dofs == moving_dofs
+            && self.matches(template)
+    }
+
     /// Whether `q` has the template's values on every unmoving joint.
     fn matches(&self, q: &[f32]) -> bool {
         q.len() == self.template.len()
@@ -485,6 +532,11 @@ impl CollisionChecker {
         self.fixed = None;
         let model = &self.agent.model;
         assert_eq!(template.len(), model.dof(), "template length");
+        let kept = (self.obstacles.fixed).find(|f| f.serves(self, template, moving_dofs));
+        if let Some(f) = kept {
+            self.fixed = Some(f);
+            return;
+        }
         let mut moving_dof = vec![false; model.dof()];
         for &d in moving_dofs {
             moving_dof[d] = true;
@@ -527,7 +579,10 @@ impl CollisionChecker {
                 s.aabbs.clone(),
             )
         });
-        self.fixed = Some(Arc::new(FixedJoints {
+        let fixed = Arc::new(FixedJoints {
+            agent: self.agent.clone(),
+            base: self.base,
+            self_collision: self.self_collision,
             template: template.to_vec(),
             moving_dofs: moving_dofs.to_vec(),
             moving_dof,
@@ -539,7 +594,9 @@ impl CollisionChecker {
             moving_shapes,
             moving_groups,
             static_hits,
-        }));
+        });
+        self.obstacles.fixed.keep(fixed.clone());
+        self.fixed = Some(fixed);
     }
 
     /// Drops the cache made by [`CollisionChecker::set_fixed_joints`].

@@ -50,6 +50,15 @@ pub struct Arm {
 }
 
 impl Arm {
+    /// The degrees of freedom that move with the arm: its chain's and its fingers' (whose
+    /// links hang from the chain), as a checker for many configurations of the arm
+    /// ([`ArmMotion::arm_checker`]) takes them, so that one made with the gripper open serves
+    /// it closed too.
+    pub fn moving_dofs(&self) -> Vec<usize> {
+        let fingers = self.gripper_dof.iter().chain(&self.gripper_followers);
+        self.chain.dofs.iter().chain(fingers).copied().collect()
+    }
+
     /// A necessary condition for the tool frame to reach `tool`: the wrist centre it implies
     /// (back from the tool along its x axis) lies within the arm's reach from `shoulder` (the
     /// first movable joint's world position). Cheap; inverse kinematics decides.
@@ -431,7 +440,7 @@ impl<'a> ArmMotion<'a> {
     /// from a few checks on: motion planning, straight moves).
     pub fn arm_checker(&self) -> CollisionChecker {
         let mut checker = self.checker.clone();
-        checker.set_fixed_joints(&self.template, &self.arm.chain.dofs);
+        checker.set_fixed_joints(&self.template, &self.arm.moving_dofs());
         checker
     }
 

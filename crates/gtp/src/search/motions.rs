@@ -194,7 +194,7 @@ pub(super) fn straddles<'a>(
         shape: shape.clone(),
     };
     let (mut checker, hand) = robot::around_object(motion.setup, motion.arm, motion.base, object);
-    checker.set_fixed_joints(&motion.template, &motion.arm.chain.dofs);
+    checker.set_fixed_joints(&motion.template, &motion.arm.moving_dofs());
     move |qa: &[f32]| {
         !gripper.intersects(&motion.tool_pose(qa), &*shape, &pose)
             && checker
