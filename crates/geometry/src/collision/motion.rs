@@ -627,7 +627,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entry_gap(e, p, plain(&*ob.shape.0), &ob.pose, w),
+                    &|w| entry_gap(e, p, plain(&*ob.shape.0), (&ob.pose, remaining), w),
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
                 )
@@ -677,7 +677,7 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entry_gap(ea, pa, entry(eb), pb, w),
+                    &|w| entry_gap(ea, pa, entry(eb), (pb, remaining), w),
                     &|| ea.hits_shape_by_gjk(pa, eb, pb),
                     Hit::SelfPair(a as usize, b as usize),
                 )
@@ -699,7 +699,7 @@ impl CollisionChecker {
                 let cheap = (ce - p.translation).length() - re - h.radius;
                 apart_or(
                     cheap,
-                    &|w| entry_gap(e, pe, plain(&*h.shape.0), &p, w),
+                    &|w| entry_gap(e, pe, plain(&*h.shape.0), (&p, remaining), w),
                     &|| e.hits(pe, &*h.shape.0, &p),
                     Hit::HeldShape(k as usize, i as usize),
                 )
@@ -747,7 +747,7 @@ pub(super) fn proven_apart(
             // frames' origins: a mesh piece's frame is its link's.
             let pos12 = pa.inv_mul(&pb);
             let mut start = a.ball.0 - pos12 * b.ball.0;
-            support_gap_until(&pos12, (sa, sb), &mut start, needed)
+            support_gap_until(&pos12, (sa, sb), &mut start, (needed, needed))
         }
         _ => lower_bound_distance(&pa, &*a.shape.0, &pb, &*b.shape.0),
     };
@@ -773,11 +773,14 @@ fn entry_gap(
     e: &ShapeEntry,
     pose: &Pose,
     (other, other_support): (&dyn Shape, Option<&dyn SupportMap>),
-    other_pose: &Pose,
+    (other_pose, enough): (&Pose, f32),
     warm: &mut Vector,
 ) -> f32 {
     match (e.support(), other_support) {
-        (Some(a), Some(b)) => support_gap(&pose.inv_mul(other_pose), a, b, warm),
+        (Some(a), Some(b)) => {
+            let ends = (enough, f32::NEG_INFINITY);
+            support_gap_until(&pose.inv_mul(other_pose), (a, b), warm, ends)
+        }
         _ => lower_bound_distance(pose, &*e.shape.0, other_pose, other),
     }
 }
@@ -799,16 +802,17 @@ fn entry(e: &ShapeEntry) -> (&dyn Shape, Option<&dyn SupportMap>) {
 /// GJK returns its last direction, not its best: for two long hulls a few millimetres apart,
 /// face to face, that one can show a fiftieth of the gap.
 fn support_gap(pos12: &Pose, a: &dyn SupportMap, b: &dyn SupportMap, warm: &mut Vector) -> f32 {
-    support_gap_until(pos12, (a, b), warm, f32::INFINITY)
+    support_gap_until(pos12, (a, b), warm, (f32::INFINITY, f32::NEG_INFINITY))
 }
 
 /// [`support_gap`], stopped as soon as the answer is known to be at least `enough`, or known
-/// to be less (a finite `enough`: whether two shapes are that far apart, not how far).
+/// to be less than `below` (`enough` and `below` the same: whether two shapes are that far
+/// apart, not how far).
 fn support_gap_until(
     pos12: &Pose,
     (a, b): (&dyn SupportMap, &dyn SupportMap),
     warm: &mut Vector,
-    enough: f32,
+    (enough, below): (f32, f32),
 ) -> f32 {
     let start = match warm.try_normalize() {
         Some(d) => d,
@@ -830,9 +834,7 @@ fn support_gap_until(
         if lower > best.0 {
             best = (lower, dir);
         }
-        if upper - best.0 <= GJK_SETTLED * upper
-            || (enough.is_finite() && (best.0 >= enough || upper < enough))
-        {
+        if upper - best.0 <= GJK_SETTLED * upper || best.0 >= enough || upper < below {
             break;
         }
         if !simplex.add_point(cso) {
