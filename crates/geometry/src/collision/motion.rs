@@ -510,13 +510,25 @@ impl CollisionChecker {
             }
         }
         if self.self_collision {
+            // Each link's speed (the world without it), made where needed: two links' sum
+            // bounds their relative speed, and rules out most pairs before it is needed.
+            let mut alone = vec![f32::NAN; s.links.len()];
+            let mut speed_of = |l: usize| {
+                if alone[l].is_nan() {
+                    alone[l] = reach.rate(speed, self.link_body(l), None);
+                }
+                alone[l]
+            };
             for (g, pg) in groups.iter().enumerate() {
                 let (a, b) = (pg.a as usize, pg.b as usize);
                 let (ba, bb) = (self.link_body(a), self.link_body(b));
+                let balls = (s.centres[a] - s.centres[b]).length() - ba.2 - bb.2;
+                if balls > speed_of(a) + speed_of(b) {
+                    continue;
+                }
                 let rate = reach.rate(speed, ba, Some(bb));
                 // Too far apart to meet in the whole motion (their balls, then capsules), or
                 // proven apart all along it by their cells.
-                let balls = (s.centres[a] - s.centres[b]).length() - ba.2 - bb.2;
                 if balls > rate
                     || self.agent.capsule_gap(pg, &s.links) > rate
                     || self.agent.proven_apart_along(pg, motion)
