@@ -3,7 +3,7 @@
 //! of the tool, and RRT-Connect between configurations — all checked for collisions with the
 //! `geometry` crate's checker.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use geometry::agent::{AgentModel, KinematicChain};
 use geometry::collision::{
@@ -411,6 +411,9 @@ pub struct ArmMotion<'a> {
     /// The full configuration whose arm values are replaced (torso, head, gripper kept).
     pub template: Vec<f32>,
     pub base: Pose,
+    /// [`ArmMotion::arm_checker`], made from `checker` and `template` on first use (change
+    /// those before).
+    fixed: OnceLock<CollisionChecker>,
 }
 
 impl<'a> ArmMotion<'a> {
@@ -432,30 +435,35 @@ impl<'a> ArmMotion<'a> {
             checker,
             template,
             base,
+            fixed: OnceLock::new(),
         }
     }
 
     /// A checker for many configurations of this arm: only the arm's joints change between
     /// checks, so the rest of the robot's poses and collisions are computed once here (worth it
     /// from a few checks on: motion planning, straight moves).
-    pub fn arm_checker(&self) -> CollisionChecker {
-        let mut checker = self.checker.clone();
-        checker.set_fixed_joints(&self.template, &self.arm.moving_dofs());
-        checker
+    pub fn arm_checker(&self) -> &CollisionChecker {
+        self.fixed.get_or_init(|| {
+            let mut checker = self.checker.clone();
+            checker.set_fixed_joints(&self.template, &self.arm.moving_dofs());
+            checker
+        })
     }
 
     /// Whether the arm values `qa` are collision-free.
     pub fn free(&self, qa: &[f32]) -> bool {
         let mut q = self.template.clone();
         set_arm_values(self.arm, &mut q, qa);
-        self.checker.is_config_free(&q)
+        self.arm_checker().is_config_free(&q)
     }
 
     /// The first collision at arm values `qa`, in words (for failure reports).
     pub fn collision(&self, qa: &[f32]) -> Option<String> {
         let mut q = self.template.clone();
         set_arm_values(self.arm, &mut q, qa);
-        self.checker.first_collision(&q).map(|c| c.to_string())
+        self.arm_checker()
+            .first_collision(&q)
+            .map(|c| c.to_string())
     }
 
     /// The full configuration for arm values `qa`.
@@ -609,7 +617,7 @@ impl<'a> ArmMotion<'a> {
             ) {
                 return Err("the gripper touches the object".into());
             }
-            if let Some(c) = self.motion_collision(&checker, &prev, &q, checks) {
+            if let Some(c) = self.motion_collision(checker, &prev, &q, checks) {
                 return Err(c);
             }
             waypoints.push(q);
@@ -632,7 +640,7 @@ impl<'a> ArmMotion<'a> {
             checker.is_config_free(&full)
         };
         let mut certify = |a: &[f32], b: &[f32], checks: &mut usize| {
-            self.motion_collision(&checker, a, b, checks).is_none()
+            self.motion_collision(checker, a, b, checks).is_none()
         };
         rrt::plan_certified(
             &self.arm.space,
