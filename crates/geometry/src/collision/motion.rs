@@ -16,7 +16,7 @@ use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::query::gjk::{CsoPoint, VoronoiSimplex};
-use parry3d::shape::{Shape, SupportMap};
+use parry3d::shape::{Compound, Shape, SupportMap};
 
 use super::self_collision::{PairGroup, ShapeEntry};
 use super::{CollisionChecker, Contact, HeldObject, Hit, SCRATCH, Scratch, intersects};
@@ -639,7 +639,13 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| entry_gap(e, p, plain(&*ob.shape.0), (&ob.pose, remaining), w),
+                    &|w| {
+                        let box_at = &s.aabbs[i as usize];
+                        if let Some(c) = ob.shape.as_compound() {
+                            return compound_gap((e, p, box_at), (c, &ob.pose), remaining);
+                        }
+                        entry_gap(e, p, plain(&*ob.shape.0), (&ob.pose, remaining), w)
+                    },
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
                 )
@@ -795,6 +801,41 @@ fn entry_gap(
         }
         _ => lower_bound_distance(pose, &*e.shape.0, other_pose, other),
     }
+}
+
+/// A lower bound on the distance between an agent shape at `pose` (its world box `bounds`)
+/// and compound `c` at `c_pose`: the least over the parts whose boxes are nearer than the best
+/// so far, each by GJK in the part's frame with the shape's climbing support, stopped once it
+/// is known to be at least `enough` or that best ([`lower_bound_distance`] visited every
+/// vertex of a mesh piece for its box, and each support point by a scan).
+fn compound_gap(
+    (e, pose, bounds): (&ShapeEntry, &Pose, &Aabb),
+    (c, c_pose): (&Compound, &Pose),
+    enough: f32,
+) -> f32 {
+    let mut best = f32::INFINITY;
+    for (p, part) in c.shapes() {
+        let at = *c_pose * *p;
+        let cheap = aabb_gap(&part.compute_aabb(&at), bounds);
+        if cheap >= best {
+            continue;
+        }
+        let gap = match (e.support(), part.as_support_map()) {
+            (Some(a), Some(b)) => {
+                let pos21 = at.inv_mul(pose);
+                let mut start = -pos21.translation;
+                support_gap_until(
+                    &pos21,
+                    (b, a),
+                    &mut start,
+                    (best.min(enough), f32::NEG_INFINITY),
+                )
+            }
+            _ => lower_bound_distance(pose, &*e.shape.0, &at, &**part),
+        };
+        best = best.min(gap.max(cheap));
+    }
+    best
 }
 
 /// A shape that is no agent shape, with its support function.
