@@ -805,9 +805,10 @@ fn entry_gap(
 
 /// A lower bound on the distance between an agent shape at `pose` (its world box `bounds`)
 /// and compound `c` at `c_pose`: the least over the parts whose boxes are nearer than the best
-/// so far, each by GJK in the part's frame with the shape's climbing support, stopped once it
-/// is known to be at least `enough` or that best ([`lower_bound_distance`] visited every
-/// vertex of a mesh piece for its box, and each support point by a scan).
+/// so far, each by GJK in the part's frame with the shape's support function (a large hull's
+/// climbing one), stopped once it is known to be at least `enough` or that best
+/// ([`lower_bound_distance`] visited every vertex of a mesh piece for its box, and each
+/// support point by a scan).
 fn compound_gap(
     (e, pose, bounds): (&ShapeEntry, &Pose, &Aabb),
     (c, c_pose): (&Compound, &Pose),
