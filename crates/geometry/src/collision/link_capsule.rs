@@ -48,6 +48,20 @@ impl LinkCapsule {
         segment_distance(pa, qa, pb, qb) - self.radius - other.radius
     }
 
+    /// [`LinkCapsule::gap`] between two bodies that may have no capsule: negative infinity (no
+    /// bound) where either has none.
+    pub(super) fn gap_of(
+        a: Option<&LinkCapsule>,
+        pa: &Pose,
+        b: Option<&LinkCapsule>,
+        pb: &Pose,
+    ) -> f32 {
+        match (a, b) {
+            (Some(a), Some(b)) => a.gap(pa, b, pb),
+            _ => f32::NEG_INFINITY,
+        }
+    }
+
     /// A lower bound on the distance between this capsule, its link at `pose`, and the ball
     /// (`centre`, `radius`).
     pub(super) fn ball_gap(&self, pose: &Pose, centre: Vector, radius: f32) -> f32 {

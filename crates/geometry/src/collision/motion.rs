@@ -639,12 +639,12 @@ impl CollisionChecker {
                 }
                 apart_or(
                     cheap,
-                    &|w| {
-                        let box_at = &s.aabbs[i as usize];
-                        if let Some(c) = ob.shape.as_compound() {
-                            return compound_gap((e, p, box_at), (c, &ob.pose), remaining);
+                    &|w| match ob.shape.as_compound() {
+                        Some(c) => {
+                            let shape = (e.support(), &*e.shape.0, p, &s.aabbs[i as usize]);
+                            compound_gap(shape, (c, &ob.pose), remaining)
                         }
-                        entry_gap(e, p, plain(&*ob.shape.0), (&ob.pose, remaining), w)
+                        None => entry_gap(e, p, plain(&*ob.shape.0), (&ob.pose, remaining), w),
                     },
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
@@ -803,14 +803,13 @@ fn entry_gap(
     }
 }
 
-/// A lower bound on the distance between an agent shape at `pose` (its world box `bounds`)
-/// and compound `c` at `c_pose`: the least over the parts whose boxes are nearer than the best
-/// so far, each by GJK in the part's frame with the shape's support function (a large hull's
-/// climbing one), stopped once it is known to be at least `enough` or that best
-/// ([`lower_bound_distance`] visited every vertex of a mesh piece for its box, and each
-/// support point by a scan).
+/// A lower bound on the distance between a shape at `pose` (its support function where it
+/// has one, a large hull's climbing one for an agent shape; its world box `bounds`) and
+/// compound `c` at `c_pose`: the least over the parts whose boxes are nearer than the best so
+/// far, each by GJK in the part's frame, stopped once it is known to be at least `enough` or
+/// that best (which leaves the least as it is).
 fn compound_gap(
-    (e, pose, bounds): (&ShapeEntry, &Pose, &Aabb),
+    (support, shape, pose, bounds): (Option<&dyn SupportMap>, &dyn Shape, &Pose, &Aabb),
     (c, c_pose): (&Compound, &Pose),
     enough: f32,
 ) -> f32 {
@@ -821,18 +820,14 @@ fn compound_gap(
         if cheap >= best {
             continue;
         }
-        let gap = match (e.support(), part.as_support_map()) {
+        let gap = match (support, part.as_support_map()) {
             (Some(a), Some(b)) => {
                 let pos21 = at.inv_mul(pose);
                 let mut start = -pos21.translation;
-                support_gap_until(
-                    &pos21,
-                    (b, a),
-                    &mut start,
-                    (best.min(enough), f32::NEG_INFINITY),
-                )
+                let ends = (best.min(enough), f32::NEG_INFINITY);
+                support_gap_until(&pos21, (b, a), &mut start, ends)
             }
-            _ => lower_bound_distance(pose, &*e.shape.0, &at, &**part),
+            _ => lower_bound_distance(&at, &**part, pose, shape),
         };
         best = best.min(gap.max(cheap));
     }
@@ -918,16 +913,8 @@ pub(super) fn lower_bound_distance(pa: &Pose, a: &dyn Shape, pb: &Pose, b: &dyn 
     if let Some(c) = a.as_compound() {
         // The nearest part, its boxes first: a part whose box is farther than the best so far
         // cannot be nearer.
-        let other = b.compute_aabb(pb);
-        let mut best = f32::INFINITY;
-        for (p, part) in c.shapes() {
-            let at = *pa * *p;
-            let cheap = aabb_gap(&part.compute_aabb(&at), &other);
-            if cheap < best {
-                best = best.min(lower_bound_distance(&at, &*part.0, pb, b).max(cheap));
-            }
-        }
-        return best;
+        let other = (b.as_support_map(), b, pb, &b.compute_aabb(pb));
+        return compound_gap(other, (c, pa), f32::INFINITY);
     }
     match (a.as_support_map(), b.as_support_map()) {
         (Some(sa), Some(sb)) => {

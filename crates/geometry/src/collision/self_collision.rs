@@ -176,10 +176,12 @@ impl ShapeEntry {
     /// A lower bound on the distance between this shape and `other`, their links at `link`
     /// and `other_link`, by their capsules; negative infinity where either has none.
     pub(super) fn capsule_gap(&self, link: &Pose, other: &ShapeEntry, other_link: &Pose) -> f32 {
-        let (Some(ca), Some(cb)) = (&self.capsule, &other.capsule) else {
-            return f32::NEG_INFINITY;
-        };
-        ca.gap(link, cb, other_link)
+        LinkCapsule::gap_of(
+            self.capsule.as_ref(),
+            link,
+            other.capsule.as_ref(),
+            other_link,
+        )
     }
 
     /// Points in its link's frame whose convex hull holds the shape: a polyhedron's vertices,
@@ -557,11 +559,11 @@ impl SelfCollisionModel {
     /// A lower bound on the distance between links `a` and `b` at world poses `links` by their
     /// capsules (negative infinity for a link without shapes).
     fn capsules_gap(&self, a: usize, b: usize, links: &[Pose]) -> f32 {
-        let capsules = (&self.link_capsules[a], &self.link_capsules[b]);
-        let (Some(ca), Some(cb)) = capsules else {
-            return f32::NEG_INFINITY;
-        };
-        ca.gap(&links[a], cb, &links[b])
+        let capsules = (
+            self.link_capsules[a].as_ref(),
+            self.link_capsules[b].as_ref(),
+        );
+        LinkCapsule::gap_of(capsules.0, &links[a], capsules.1, &links[b])
     }
 
     /// A lower bound on the distance between link `l` at world pose `link` and a ball
@@ -789,9 +791,8 @@ struct Bodies<'a> {
 impl Bodies<'_> {
     /// Whether links `a` and `b` collide with the links at `poses`.
     fn collide(&self, poses: &[Pose], a: usize, b: usize) -> bool {
-        if let (Some(ca), Some(cb)) = (&self.capsules[a], &self.capsules[b])
-            && ca.gap(&poses[a], cb, &poses[b]) > 0.0
-        {
+        let capsules = (self.capsules[a].as_ref(), self.capsules[b].as_ref());
+        if LinkCapsule::gap_of(capsules.0, &poses[a], capsules.1, &poses[b]) > 0.0 {
             return false; // the links' capsules, which hold their shapes, are apart
         }
         for ca in self.by_link[a].iter().map(|&i| &self.shapes[i]) {
