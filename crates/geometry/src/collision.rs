@@ -41,11 +41,13 @@ use parry3d::shape::{Shape, SharedShape};
 
 use crate::agent::{AgentModel, ModelError};
 
+mod base_sweep;
 mod climbing_hull;
 mod link_capsule;
 mod motion;
 mod pair_cells;
 mod self_collision;
+pub use base_sweep::BaseSweep;
 pub use motion::MotionCheck;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
 

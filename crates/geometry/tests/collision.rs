@@ -630,3 +630,89 @@ fn pair_cells_never_free_a_collision() {
         (3, 2000),
     );
 }
+
+/// A configuration checked at many base poses answers as the full check at each, but where
+/// the robot is within a millimetre of the scene (the exact tests' tolerance band): a grid of
+/// poses and headings through a room of furniture, holding a book, in a free posture and in
+/// one whose arm hits the torso.
+#[test]
+fn base_sweeps_answer_as_the_full_check() {
+    let m = self_model("pr2.urdf");
+    let model = m.model().clone();
+    let scene = vec![
+        boxed(
+            "table",
+            Vector::new(1.5, 0.0, 0.36),
+            Vector::new(0.4, 0.6, 0.36),
+        ),
+        boxed(
+            "shelf",
+            Vector::new(-1.0, 1.2, 0.8),
+            Vector::new(0.4, 0.15, 0.8),
+        ),
+        boxed(
+            "wall",
+            Vector::new(0.0, -2.0, 1.0),
+            Vector::new(3.0, 0.05, 1.0),
+        ),
+    ];
+    let book = SharedShape::cuboid(0.1, 0.07, 0.03);
+    let tool = "r_gripper_tool_frame";
+    let held = HeldObject::new(&model, "book", book.clone(), tool, Pose::IDENTITY).unwrap();
+    let obstacles = Arc::new(StaticObstacles::new(scene.clone()));
+    let checker =
+        CollisionChecker::new(m.clone(), obstacles, Pose::IDENTITY).with_held_object(held);
+    // The robot's and the book's signed distance to the scene (negative: the depth).
+    let nearest = |base: Pose, q: &[f32]| {
+        let mut parts = geometry::collision::agent_obstacles(&model, base, q, "r");
+        let at = model.link_pose(base, q, tool).unwrap();
+        parts.push(Obstacle {
+            name: "book".into(),
+            pose: at,
+            shape: book.clone(),
+        });
+        let pairs = parts.iter().flat_map(|p| scene.iter().map(move |o| (p, o)));
+        pairs
+            .filter_map(|(p, o)| {
+                parry3d::query::contact(&p.pose, &*p.shape.0, &o.pose, &*o.shape.0, 1.0)
+                    .unwrap()
+                    .map(|c| c.dist)
+            })
+            .fold(f32::INFINITY, f32::min)
+    };
+    let free_q = model.default_configuration().into_vec();
+    let mut folded = model.default_configuration();
+    folded
+        .set_many(&[
+            ("r_shoulder_pan_joint", 0.7),
+            ("r_upper_arm_roll_joint", -std::f32::consts::FRAC_PI_2),
+            ("r_elbow_flex_joint", -2.3),
+        ])
+        .unwrap();
+    let folded = folded.into_vec();
+    let (mut answers, mut in_band) = ([0usize; 2], 0);
+    for q in [&free_q, &folded] {
+        let mut sweep = checker.base_sweep(q);
+        let mut full = checker.clone();
+        for i in -30..=30 {
+            for j in -30..=30 {
+                let yaw = (i * 7 + j * 3) as f32 * 0.1;
+                let base = geometry::world::base_pose(i as f32 * 0.1, j as f32 * 0.1, yaw);
+                full.set_base(base);
+                let expected = full.is_config_free(q);
+                if sweep.is_free_at(base) != expected {
+                    let d = nearest(base, q);
+                    assert!(
+                        d.abs() < 1e-3,
+                        "at {i} {j}: {expected} by the full check, {d} m"
+                    );
+                    in_band += 1;
+                }
+                answers[expected as usize] += 1;
+            }
+        }
+    }
+    // Both answers occur, near the furniture and away from it; the band is thin.
+    assert!(answers[0] > 2000 && answers[1] > 500, "{answers:?}");
+    assert!(in_band <= 5, "{in_band} answers differ within the band");
+}

@@ -444,7 +444,7 @@ fn free_region(
     let step = FreeRegion::STEP;
     let origin = (from[0], from[1]);
     let bounds = &start.bounds;
-    let mut ck = checker.clone();
+    let mut sweep = checker.base_sweep(&start.q);
     let mut free = |i: i32, j: i32| {
         let (x, y) = (origin.0 + i as f32 * step, origin.1 + j as f32 * step);
         if x < bounds.mins.x || x > bounds.maxs.x || y < bounds.mins.y || y > bounds.maxs.y {
@@ -452,8 +452,7 @@ fn free_region(
         }
         (0..REGION_YAWS).any(|k| {
             let yaw = from[2] + k as f32 * std::f32::consts::TAU / REGION_YAWS as f32;
-            ck.set_base(geometry::world::base_pose(x, y, yaw));
-            ck.is_config_free(&start.q)
+            sweep.is_free_at(geometry::world::base_pose(x, y, yaw))
         })
     };
     let mut cells = HashSet::new();
