@@ -42,12 +42,13 @@ use parry3d::shape::{Shape, SharedShape};
 use crate::agent::{AgentModel, ModelError};
 
 mod base_sweep;
-mod climbing_hull;
+pub(crate) mod climbing_hull;
 mod link_capsule;
 mod motion;
 mod pair_cells;
 mod self_collision;
 pub use base_sweep::BaseSweep;
+pub use climbing_hull::HullBounds;
 pub use motion::MotionCheck;
 pub use self_collision::{AllowedPair, AllowedReason, SelfCollisionModel, SelfCollisionOptions};
 

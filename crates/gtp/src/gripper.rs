@@ -19,6 +19,7 @@ use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
 use geometry::agent::{AgentModel, Joint};
+use geometry::collision::HullBounds;
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::shape::{Cuboid, Shape, SharedShape};
@@ -46,6 +47,8 @@ struct LinkBox {
     cuboid: Cuboid,
     /// The shape itself when it is not a box.
     shape: Option<SharedShape>,
+    /// For a large hull, its bounding boxes without visiting every vertex.
+    bounds: Option<HullBounds>,
 }
 
 /// How a joint between the gripper's root and one of its links takes its value from the
@@ -404,6 +407,7 @@ fn link_boxes(model: &AgentModel, link: usize) -> Vec<LinkBox> {
                 in_link: c.local_pose,
                 cuboid: *cuboid,
                 shape: None,
+                bounds: None,
             },
             None => {
                 let aabb = c.shape.compute_local_aabb();
@@ -411,6 +415,7 @@ fn link_boxes(model: &AgentModel, link: usize) -> Vec<LinkBox> {
                     in_link: c.local_pose,
                     cuboid: Cuboid::new(aabb.half_extents()),
                     shape: Some(c.shape.clone()),
+                    bounds: HullBounds::of(&c.shape),
                 }
             }
         })
@@ -425,7 +430,10 @@ impl LinkBox {
         match &self.shape {
             None => (pose, self.cuboid),
             Some(shape) => {
-                let aabb = shape.compute_aabb(&pose);
+                let aabb = match &self.bounds {
+                    Some(bounds) => bounds.aabb(&pose),
+                    None => shape.compute_aabb(&pose),
+                };
                 (
                     Pose::from_translation(aabb.center()),
                     Cuboid::new(aabb.half_extents()),

@@ -5,20 +5,55 @@
 //! was tried on 2026-12-06 and removed: in one plan it let a human's reach pass through a
 //! robot finger that a fresh check finds; the cause was not found.)
 
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
 use parry3d::query::details::intersection_test_support_map_support_map_with_params;
 use parry3d::query::gjk::VoronoiSimplex;
-use parry3d::shape::{ConvexPolyhedron, SupportMap};
+use parry3d::shape::{ConvexPolyhedron, SharedShape, SupportMap};
 use parry3d::transformation::convex_hull;
 
 /// Hulls with more vertices than this get a [`ClimbingHull`]; below it a scan is as fast.
 pub(super) const CLIMB_ABOVE: usize = 32;
 
+/// The most shapes whose climbing supports [`climbing_hull_of`] keeps (a robot has a few
+/// hundred mesh pieces); past it the kept ones are dropped and made again as asked.
+const MAX_KEPT_HULLS: usize = 4096;
+
+/// The climbing support of `shape`, a convex polyhedron of more than [`CLIMB_ABOVE`]
+/// vertices, made once per shape (its `Arc`) and shared by the collision checks, the
+/// visibility rays and the grippers' boxes; `None` for any other shape. The shape is kept
+/// with it, so that its address names it while kept.
+pub(crate) fn climbing_hull_of(shape: &SharedShape) -> Option<Arc<ClimbingHull>> {
+    type Kept = HashMap<usize, (SharedShape, Arc<ClimbingHull>)>;
+    static KEPT: OnceLock<Mutex<Kept>> = OnceLock::new();
+    let hull = shape
+        .as_convex_polyhedron()
+        .filter(|hull| hull.points().len() > CLIMB_ABOVE)?;
+    let key = Arc::as_ptr(&shape.0) as *const () as usize;
+    let mut kept = KEPT
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    if let Some((_, climb)) = kept.get(&key) {
+        return Some(climb.clone());
+    }
+    if kept.len() >= MAX_KEPT_HULLS {
+        kept.clear();
+    }
+    let climb = Arc::new(ClimbingHull::new(hull));
+    kept.insert(key, (shape.clone(), climb.clone()));
+    Some(climb)
+}
+
 /// A convex polyhedron's support function by hill climbing over its vertex graph: from the
 /// best of a few extreme vertices, move to a better neighbour until none is better. On a
 /// convex polytope a vertex no neighbour improves is a global maximum of any linear function,
 /// so the answer is exact; it visits tens of vertices where a scan visits all.
-pub(super) struct ClimbingHull {
+pub(crate) struct ClimbingHull {
     points: Vec<Vector>,
     /// Neighbours of vertex `v`: `neighbours[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<u32>,
@@ -63,7 +98,7 @@ impl ClimbingHull {
     /// The vertex farthest along `dir` and its index, climbing from vertex `from` where it is
     /// one (the last answer for a nearby direction: a step or two away), else from the best
     /// of the start vertices.
-    pub(super) fn climb(&self, dir: Vector, from: u32) -> (u32, Vector) {
+    pub(crate) fn climb(&self, dir: Vector, from: u32) -> (u32, Vector) {
         let (mut v, mut best) = match self.points.get(from as usize) {
             Some(p) => (from as usize, p.dot(dir)),
             None => {
@@ -92,6 +127,60 @@ impl ClimbingHull {
                 return (v as u32, self.points[v]);
             }
         }
+    }
+}
+
+/// The bounding boxes of a large hull at any pose, found by climbing to its extreme vertex
+/// along each axis instead of moving every vertex: the box parry's `compute_aabb` gives (the
+/// same extreme vertices, moved the same way). Each climb starts where the last one along the
+/// same axis ended (a box asked for at nearby poses is a step or two away); the answer does
+/// not depend on where a climb starts.
+pub struct HullBounds {
+    hull: Arc<ClimbingHull>,
+    /// The vertex each of the six climbs (+x, -x, +y, -y, +z, -z) last ended at.
+    last: [AtomicU32; 6],
+}
+
+impl Clone for HullBounds {
+    fn clone(&self) -> HullBounds {
+        HullBounds {
+            hull: self.hull.clone(),
+            last: std::array::from_fn(|k| AtomicU32::new(self.last[k].load(Ordering::Relaxed))),
+        }
+    }
+}
+
+impl std::fmt::Debug for HullBounds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "HullBounds({} vertices)", self.hull.points.len())
+    }
+}
+
+impl HullBounds {
+    /// For a convex polyhedron of more than a few dozen vertices (see [`climbing_hull_of`]);
+    /// `None` for any other shape, whose own `compute_aabb` is as cheap.
+    pub fn of(shape: &SharedShape) -> Option<HullBounds> {
+        climbing_hull_of(shape).map(|hull| HullBounds {
+            hull,
+            last: std::array::from_fn(|_| AtomicU32::new(u32::MAX)),
+        })
+    }
+
+    /// The hull's bounding box at `pose`.
+    pub fn aabb(&self, pose: &Pose) -> Aabb {
+        let to_local = pose.rotation.inverse();
+        let extreme = |k: usize, dir: Vector| {
+            let (v, p) = self.hull.climb(dir, self.last[k].load(Ordering::Relaxed));
+            self.last[k].store(v, Ordering::Relaxed);
+            *pose * p
+        };
+        let (mut mins, mut maxs) = (Vector::ZERO, Vector::ZERO);
+        for (i, axis) in [Vector::X, Vector::Y, Vector::Z].into_iter().enumerate() {
+            let d = to_local * axis;
+            maxs[i] = extreme(2 * i, d)[i];
+            mins[i] = extreme(2 * i + 1, -d)[i];
+        }
+        Aabb::new(mins, maxs)
     }
 }
 
@@ -217,5 +306,22 @@ mod tests {
             hits += hit as usize;
         }
         assert!((200..3800).contains(&hits), "{hits} of 4000 intersect");
+    }
+
+    #[test]
+    fn hull_bounds_are_the_boxes_parry_computes() {
+        let hull = ConvexPolyhedron::from_convex_hull(&sphere_points(800, 4)).unwrap();
+        let shape = SharedShape::new(hull);
+        let bounds = HullBounds::of(&shape).unwrap();
+        let mut rng = fastrand::Rng::with_seed(8);
+        for _ in 0..2000 {
+            let pose = Pose::from_parts(
+                Vector::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5) * 4.0,
+                Rotation::from_scaled_axis(Vector::new(rng.f32(), rng.f32(), rng.f32()) * 6.0),
+            );
+            let (a, b) = (bounds.aabb(&pose), shape.compute_aabb(&pose));
+            assert_eq!((a.mins, a.maxs), (b.mins, b.maxs), "{pose:?}");
+        }
+        assert!(HullBounds::of(&SharedShape::cuboid(1.0, 1.0, 1.0)).is_none());
     }
 }

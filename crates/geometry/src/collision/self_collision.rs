@@ -9,7 +9,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Mat3, Pose, Vector};
 use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
-use super::climbing_hull::{CLIMB_ABOVE, ClimbingHull, gjk};
+use super::climbing_hull::{ClimbingHull, climbing_hull_of, gjk};
 use super::intersects;
 use super::link_capsule::LinkCapsule;
 use super::motion::{JointReach, body, lower_bound_distance};
@@ -141,10 +141,7 @@ impl ShapeEntry {
                 Cuboid::new(aabb.half_extents() + Vector::splat(BOUNDS_MARGIN)),
             )
         });
-        let climb = shape
-            .as_convex_polyhedron()
-            .filter(|hull| hull.points().len() > CLIMB_ABOVE)
-            .map(|hull| Arc::new(ClimbingHull::new(hull)));
+        let climb = climbing_hull_of(&shape);
         // The smaller of two balls that hold the shape: `radius` about its frame's origin, or
         // parry's bounding sphere (about its box's centre).
         let sphere = shape.compute_local_bounding_sphere();
