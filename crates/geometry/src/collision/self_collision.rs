@@ -430,11 +430,15 @@ impl SelfCollisionModel {
                 status[key(a, b)] = Some(AllowedReason::Default);
             }
         }
-        let always = always_colliding(&model, &candidate_links, options, |poses, a, b| {
+        // The pairs left out already (colliding in the default configuration) are not sampled.
+        let open: Vec<(usize, usize)> = (candidate_links.iter().copied())
+            .filter(|&(a, b)| status[key(a, b)].is_none())
+            .collect();
+        let always = always_colliding(&model, &open, options, |poses, a, b| {
             bodies.collide(poses, a, b)
         });
-        for (k, &(a, b)) in candidate_links.iter().enumerate() {
-            if always[k] && status[key(a, b)].is_none() {
+        for (k, &(a, b)) in open.iter().enumerate() {
+            if always[k] {
                 status[key(a, b)] = Some(AllowedReason::Always);
             }
         }
