@@ -408,7 +408,7 @@ fn a_mesh_link_hides_what_the_same_box_hides() {
     for i in 0..12 {
         for j in 0..12 {
             let p = Vector::new(2.0, -0.6 + 0.1 * i as f32, 0.5 + 0.1 * j as f32);
-            let mut see = |w: &mut World| {
+            let see = |w: &mut World| {
                 let t = w.object_id("target").unwrap();
                 w.set_object_pose(t, Pose::from_translation(p));
                 visibility_from(w, t, &eye, [2.0, 2.0], 32)
