@@ -19,32 +19,37 @@ use parry3d::transformation::convex_hull;
 /// Hulls with more vertices than this get a [`ClimbingHull`]; below it a scan is as fast.
 pub(super) const CLIMB_ABOVE: usize = 32;
 
-/// The most shapes whose climbing supports [`climbing_hull_of`] keeps (a robot has a few
-/// hundred mesh pieces); past it the kept ones are dropped and made again as asked.
-const MAX_KEPT_HULLS: usize = 4096;
+/// The most hull vertices whose climbing supports [`climbing_hull_of`] keeps, with their
+/// shapes (about 70 bytes a vertex: some 70 MiB; the real PR2 has 8,354); past it the kept
+/// ones are dropped, and made again as asked.
+const MAX_KEPT_VERTICES: usize = 1 << 20;
 
 /// The climbing support of `shape`, a convex polyhedron of more than [`CLIMB_ABOVE`]
 /// vertices, made once per shape (its `Arc`) and shared by the collision checks, the
 /// visibility rays and the grippers' boxes; `None` for any other shape. The shape is kept
 /// with it, so that its address names it while kept.
 pub(crate) fn climbing_hull_of(shape: &SharedShape) -> Option<Arc<ClimbingHull>> {
-    type Kept = HashMap<usize, (SharedShape, Arc<ClimbingHull>)>;
+    /// The kept supports by shape address, and their vertices in all.
+    type Kept = (HashMap<usize, (SharedShape, Arc<ClimbingHull>)>, usize);
     static KEPT: OnceLock<Mutex<Kept>> = OnceLock::new();
     let hull = shape
         .as_convex_polyhedron()
         .filter(|hull| hull.points().len() > CLIMB_ABOVE)?;
     let key = Arc::as_ptr(&shape.0) as *const () as usize;
-    let mut kept = KEPT
+    let mut guard = KEPT
         .get_or_init(Default::default)
         .lock()
         .unwrap_or_else(|e| e.into_inner());
+    let (kept, vertices) = &mut *guard;
     if let Some((_, climb)) = kept.get(&key) {
         return Some(climb.clone());
     }
-    if kept.len() >= MAX_KEPT_HULLS {
-        kept.clear();
-    }
     let climb = Arc::new(ClimbingHull::new(hull));
+    if *vertices + climb.points.len() > MAX_KEPT_VERTICES {
+        kept.clear();
+        *vertices = 0;
+    }
+    *vertices += climb.points.len();
     kept.insert(key, (shape.clone(), climb.clone()));
     Some(climb)
 }
