@@ -162,7 +162,7 @@ impl std::fmt::Debug for HullBounds {
 }
 
 impl HullBounds {
-    /// For a convex polyhedron of more than a few dozen vertices (see [`climbing_hull_of`]);
+    /// For a convex polyhedron of more than a few dozen vertices (its climbing support shared);
     /// `None` for any other shape, whose own `compute_aabb` is as cheap.
     pub fn of(shape: &SharedShape) -> Option<HullBounds> {
         climbing_hull_of(shape).map(|hull| HullBounds {
