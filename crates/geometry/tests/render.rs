@@ -1,5 +1,7 @@
 //! The renderer: id buffer, depth, PNG output, views.
 
+mod common;
+
 use std::path::Path;
 
 use geometry::render::{Camera, agent_camera, render, render_visual};
@@ -96,43 +98,13 @@ fn top_of_square() -> Camera {
     Camera::top(&area, 1.0)
 }
 
-/// An ASCII STL of an axis-aligned box with these half extents, centred at the origin.
-fn box_stl(h: [f32; 3]) -> String {
-    let v = |i: usize| {
-        let s = |bit: usize, k: usize| if i >> bit & 1 == 1 { h[k] } else { -h[k] };
-        [s(0, 0), s(1, 1), s(2, 2)]
-    };
-    // Two triangles per face, as corner indices (bit 0: +x, bit 1: +y, bit 2: +z).
-    let faces = [
-        [0, 2, 6, 4],
-        [1, 5, 7, 3],
-        [0, 4, 5, 1],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 6, 7, 5],
-    ];
-    let mut out = String::from("solid box\n");
-    for f in faces {
-        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            out.push_str("facet normal 0 0 0\nouter loop\n");
-            for i in t {
-                let p = v(i);
-                out.push_str(&format!("vertex {} {} {}\n", p[0], p[1], p[2]));
-            }
-            out.push_str("endloop\nendfacet\n");
-        }
-    }
-    out.push_str("endsolid box\n");
-    out
-}
-
 /// A one-link robot whose collision is a 0.1 m box and whose visual is `visual` (a mesh file
 /// name), in a scene of its own; the world and the link's owner.
 fn one_link_robot(dir: &str, visual: &str) -> (World, BodyOwner) {
     let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join(format!("htngtp-visual-{dir}-{}", std::process::id()));
     std::fs::create_dir_all(&root).unwrap();
-    std::fs::write(root.join("big.stl"), box_stl([0.2, 0.2, 0.2])).unwrap();
+    std::fs::write(root.join("big.stl"), common::box_stl([0.2, 0.2, 0.2])).unwrap();
     std::fs::write(root.join("bad.stl"), b"solid x\nfacet normal 0 0 1\n").unwrap();
     std::fs::write(
         root.join("bot.urdf"),

@@ -1,5 +1,7 @@
 //! Pixel visibility with known answers on constructed scenes.
 
+mod common;
+
 use std::path::Path;
 
 use geometry::render::look_rotation;
@@ -328,36 +330,6 @@ fn the_optimised_measure_counts_as_the_reference_and_stops_only_when_it_may() {
     );
 }
 
-/// An ASCII STL of the box `[-x, x] x [-y, y] x [-z, z]`.
-fn box_stl([x, y, z]: [f32; 3]) -> String {
-    let v = |i: usize| {
-        let s = |bit: usize, h: f32| if i & bit == 0 { -h } else { h };
-        [s(1, x), s(2, y), s(4, z)]
-    };
-    // Each face as two triangles (winding does not matter for a hull).
-    let faces = [
-        [0, 1, 3, 2],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 3, 7, 6],
-        [0, 2, 6, 4],
-        [1, 3, 7, 5],
-    ];
-    let mut out = String::from("solid box\n");
-    for f in faces {
-        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            out.push_str("facet normal 0 0 0\nouter loop\n");
-            for i in t {
-                let p = v(i);
-                out.push_str(&format!("vertex {} {} {}\n", p[0], p[1], p[2]));
-            }
-            out.push_str("endloop\nendfacet\n");
-        }
-    }
-    out.push_str("endsolid box\n");
-    out
-}
-
 /// A world with the target and a one-link robot whose collision is `geometry` (URDF), a long
 /// slab turned across the view: as a mesh, a convex polyhedron whose world bounds it fills
 /// badly. Files are written to a folder of its own, `name`.
@@ -365,7 +337,7 @@ fn slab_robot(name: &str, geometry: &str) -> World {
     let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join(format!("htngtp-visibility-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&root).unwrap();
-    std::fs::write(root.join("slab.stl"), box_stl([0.6, 0.03, 0.08])).unwrap();
+    std::fs::write(root.join("slab.stl"), common::box_stl([0.6, 0.03, 0.08])).unwrap();
     let urdf = format!(
         r#"<robot name="bot">
   <link name="base_link">

@@ -217,3 +217,33 @@ pub fn pair_cells_are_sound(
         }
     }
 }
+
+/// An ASCII STL of an axis-aligned box with these half extents, centred at the origin.
+pub fn box_stl(h: [f32; 3]) -> String {
+    let v = |i: usize| {
+        let s = |bit: usize, k: usize| if i >> bit & 1 == 1 { h[k] } else { -h[k] };
+        [s(0, 0), s(1, 1), s(2, 2)]
+    };
+    // Two triangles per face, as corner indices (bit 0: +x, bit 1: +y, bit 2: +z).
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ];
+    let mut out = String::from("solid box\n");
+    for f in faces {
+        for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            out.push_str("facet normal 0 0 0\nouter loop\n");
+            for i in t {
+                let p = v(i);
+                out.push_str(&format!("vertex {} {} {}\n", p[0], p[1], p[2]));
+            }
+            out.push_str("endloop\nendfacet\n");
+        }
+    }
+    out.push_str("endsolid box\n");
+    out
+}
