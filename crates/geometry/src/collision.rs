@@ -42,7 +42,7 @@ use parry3d::shape::{Shape, SharedShape};
 use crate::agent::{AgentModel, ModelError};
 
 mod base_sweep;
-pub(crate) mod climbing_hull;
+mod climbing_hull;
 mod link_capsule;
 mod motion;
 mod pair_cells;

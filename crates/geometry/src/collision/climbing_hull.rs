@@ -17,7 +17,7 @@ use parry3d::shape::{ConvexPolyhedron, SharedShape, SupportMap};
 use parry3d::transformation::convex_hull;
 
 /// Hulls with more vertices than this get a [`ClimbingHull`]; below it a scan is as fast.
-pub(super) const CLIMB_ABOVE: usize = 32;
+const CLIMB_ABOVE: usize = 32;
 
 /// The most hull vertices whose climbing supports [`climbing_hull_of`] keeps, with their
 /// shapes (about 70 bytes a vertex: some 70 MiB; the real PR2 has 8,354); past it the kept
@@ -25,10 +25,10 @@ pub(super) const CLIMB_ABOVE: usize = 32;
 const MAX_KEPT_VERTICES: usize = 1 << 20;
 
 /// The climbing support of `shape`, a convex polyhedron of more than [`CLIMB_ABOVE`]
-/// vertices, made once per shape (its `Arc`) and shared by the collision checks, the
-/// visibility rays and the grippers' boxes; `None` for any other shape. The shape is kept
-/// with it, so that its address names it while kept.
-pub(crate) fn climbing_hull_of(shape: &SharedShape) -> Option<Arc<ClimbingHull>> {
+/// vertices, made once per shape (its `Arc`) and shared by the collision checks and the
+/// grippers' boxes; `None` for any other shape. The shape is kept with it, so that its
+/// address names it while kept.
+pub(super) fn climbing_hull_of(shape: &SharedShape) -> Option<Arc<ClimbingHull>> {
     /// The kept supports by shape address, and their vertices in all.
     type Kept = (HashMap<usize, (SharedShape, Arc<ClimbingHull>)>, usize);
     static KEPT: OnceLock<Mutex<Kept>> = OnceLock::new();
@@ -58,7 +58,7 @@ pub(crate) fn climbing_hull_of(shape: &SharedShape) -> Option<Arc<ClimbingHull>>
 /// best of a few extreme vertices, move to a better neighbour until none is better. On a
 /// convex polytope a vertex no neighbour improves is a global maximum of any linear function,
 /// so the answer is exact; it visits tens of vertices where a scan visits all.
-pub(crate) struct ClimbingHull {
+pub(super) struct ClimbingHull {
     points: Vec<Vector>,
     /// Neighbours of vertex `v`: `neighbours[offsets[v]..offsets[v + 1]]`.
     offsets: Vec<u32>,
@@ -71,7 +71,7 @@ impl ClimbingHull {
     /// The climbing support of `hull`: the vertices of its triangulated surface, neighbours
     /// where a triangle joins them (parry's hull merges coplanar triangles into polygons, whose
     /// vertices would all be neighbours of each other).
-    pub(super) fn new(hull: &ConvexPolyhedron) -> ClimbingHull {
+    fn new(hull: &ConvexPolyhedron) -> ClimbingHull {
         let (points, triangles) = convex_hull(hull.points());
         let mut adjacent: Vec<Vec<u32>> = vec![Vec::new(); points.len()];
         for [a, b, c] in triangles {
@@ -103,7 +103,7 @@ impl ClimbingHull {
     /// The vertex farthest along `dir` and its index, climbing from vertex `from` where it is
     /// one (the last answer for a nearby direction: a step or two away), else from the best
     /// of the start vertices.
-    pub(crate) fn climb(&self, dir: Vector, from: u32) -> (u32, Vector) {
+    pub(super) fn climb(&self, dir: Vector, from: u32) -> (u32, Vector) {
         let (mut v, mut best) = match self.points.get(from as usize) {
             Some(p) => (from as usize, p.dot(dir)),
             None => {
