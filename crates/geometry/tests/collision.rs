@@ -716,3 +716,55 @@ fn base_sweeps_answer_as_the_full_check() {
     assert!(answers[0] > 2000 && answers[1] > 500, "{answers:?}");
     assert!(in_band <= 5, "{in_band} answers differ within the band");
 }
+
+/// A link of several shapes is followed against an obstacle as one body until they are
+/// near, then shape by shape: a rod along the axis of a turning fork, between its prongs
+/// (inside the link's box all along), is never hit; a peg beside the axis is, by a prong.
+#[test]
+fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_hit() {
+    let urdf = r#"<robot name="fork">
+      <link name="base"/>
+      <joint name="turn" type="revolute">
+        <parent link="base"/><child link="fork"/><axis xyz="1 0 0"/>
+        <limit lower="-3" upper="3" effort="1" velocity="1"/>
+      </joint>
+      <link name="fork">
+        <collision><origin xyz="0.25 0 0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
+        <collision><origin xyz="0.25 0 -0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
+      </link>
+    </robot>"#;
+    let model = Arc::new(AgentModel::from_urdf_str(urdf, "fork.urdf").unwrap());
+    let agent = Arc::new(SelfCollisionModel::new(
+        model,
+        &SelfCollisionOptions::default(),
+    ));
+    let rod = boxed(
+        "rod",
+        Vector::new(0.25, 0.0, 0.0),
+        Vector::new(0.15, 0.01, 0.01),
+    );
+    let peg = boxed(
+        "peg",
+        Vector::new(0.25, 0.06, 0.0),
+        Vector::new(0.02, 0.005, 0.005),
+    );
+    let checker = |obstacles: Vec<Obstacle>| {
+        CollisionChecker::new(
+            agent.clone(),
+            Arc::new(StaticObstacles::new(obstacles)),
+            Pose::IDENTITY,
+        )
+    };
+    let (a, b) = ([0.0], [2.5]);
+    let rod_only = checker(vec![rod.clone()]);
+    for q in [0.0, 0.7, 1.6, 2.5] {
+        assert!(rod_only.is_config_free(&[q]), "{q}");
+    }
+    let c = rod_only.check_motion(&a, &b, 1e-4);
+    assert!(c.contact.is_none(), "{c:?}");
+    let c = checker(vec![rod, peg]).check_motion(&a, &b, 1e-4);
+    assert!(
+        matches!(&c.contact, Some(Contact::Obstacle { link, obstacle }) if link == "fork" && obstacle == "peg"),
+        "{c:?}"
+    );
+}

@@ -6,14 +6,16 @@
 //! after an exact measurement, as the joints are posed (a folded arm's hand near the shoulder's
 //! axis), allowing for that distance to grow with the joints below the axis
 //! ([`JointReach::local_step`]). Each pair of bodies is re-measured on its own schedule: a
-//! far pair once a motion, a near one as it comes closer. A pair nearer than `floor` is
+//! far pair once a motion, a near one as it comes closer. A link of several shapes (a mesh's
+//! convex pieces) is followed against an obstacle as one body, by its ball and box, and shape
+//! by shape once they come within [`SPLIT`], as a pair of links is. A pair nearer than `floor` is
 //! re-measured every `floor` of relative motion, so a contact between two measurements is at
 //! most `floor / 2` deep; elsewhere the motion is free everywhere, not only at sampled
 //! configurations. Distances are proven lower bounds (see [`support_gap`]), never GJK's
 //! witnesses alone.
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::math::{Pose, Vector};
+use parry3d::math::{Mat3, Pose, Vector};
 use parry3d::query;
 use parry3d::query::gjk::{CsoPoint, VoronoiSimplex};
 use parry3d::shape::{Compound, Shape, SupportMap};
@@ -184,6 +186,8 @@ impl Above {
 enum Pair {
     /// Agent shape and obstacle.
     Obstacle(u16, u32),
+    /// A link of several shapes and an obstacle, until they are near: then its shapes.
+    LinkObstacle(u16, u32),
     /// A pair of links (an index into the checked groups), until it is near: then its shapes.
     Links(u32),
     /// Two agent shapes.
@@ -414,7 +418,7 @@ impl CollisionChecker {
                         };
                     }
                     Measure::Split => {
-                        self.split(speed, item.pair, groups, t, &mut items);
+                        self.split((speed, groups), (item.pair, t), s, &mut items);
                         f32::INFINITY
                     }
                     Measure::Apart(d, exact) => {
@@ -450,6 +454,7 @@ impl CollisionChecker {
         let sphere = |l: usize| self.link_body(l);
         match pair {
             Pair::Obstacle(i, _) => (body(&shapes[i as usize]), None),
+            Pair::LinkObstacle(l, _) => (sphere(l as usize), None),
             Pair::Links(g) => {
                 let g = groups[g as usize];
                 (sphere(g.a as usize), Some(sphere(g.b as usize)))
@@ -500,13 +505,29 @@ impl CollisionChecker {
         let mut items = Vec::new();
         let mut push = |pair, rate: f32| items.extend(Item::moving(pair, rate, 0.0));
         if !self.obstacles.is_empty() {
-            for &i in moving {
-                let e = &shapes[i as usize];
-                let rate = reach.rate(speed, body(e), None);
-                let swept = s.aabbs[i as usize].loosened(rate);
-                self.obstacles.candidates(&swept, &mut s.candidates);
+            // A link's shapes are consecutive: one pair per link of several shapes and obstacle.
+            for link in moving.chunk_by(|a, b| shapes[*a as usize].link == shapes[*b as usize].link)
+            {
+                if let [i] = link {
+                    let e = &shapes[*i as usize];
+                    let rate = reach.rate(speed, body(e), None);
+                    let swept = s.aabbs[*i as usize].loosened(rate);
+                    self.obstacles.candidates(&swept, &mut s.candidates);
+                    for &o in &s.candidates {
+                        push(Pair::Obstacle(*i, o), rate);
+                    }
+                    continue;
+                }
+                let l = shapes[link[0] as usize].link;
+                let rate = reach.rate(speed, self.link_body(l), None);
+                let mut swept = s.aabbs[link[0] as usize];
+                for &i in &link[1..] {
+                    swept.merge(&s.aabbs[i as usize]);
+                }
+                self.obstacles
+                    .candidates(&swept.loosened(rate), &mut s.candidates);
                 for &o in &s.candidates {
-                    push(Pair::Obstacle(i, o), rate);
+                    push(Pair::LinkObstacle(l as u16, o), rate);
                 }
             }
         }
@@ -568,7 +589,13 @@ impl CollisionChecker {
 
     /// Replaces a near pair of links, or a held object near a link, by its pairs of shapes,
     /// due at `t`.
-    fn split(&self, speed: &[f32], pair: Pair, groups: &[PairGroup], t: f32, out: &mut Vec<Item>) {
+    fn split(
+        &self,
+        (speed, groups): (&[f32], &[PairGroup]),
+        (pair, t): (Pair, f32),
+        s: &mut Scratch,
+        out: &mut Vec<Item>,
+    ) {
         let (shapes, reach) = (&self.agent.shapes, &self.agent.reach);
         let mut push = |pair, rate: f32| out.extend(Item::moving(pair, rate, t));
         match pair {
@@ -578,6 +605,20 @@ impl CollisionChecker {
                     let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
                     let rate = reach.rate(speed, body(ea), Some(body(eb)));
                     push(Pair::Shapes(a, b), rate);
+                }
+            }
+            Pair::LinkObstacle(l, o) => {
+                // The shapes that may reach the obstacle in the rest of the motion.
+                let obstacle = &self.obstacles.aabbs[o as usize];
+                for (i, e) in shapes.iter().enumerate() {
+                    if e.link != l as usize {
+                        continue;
+                    }
+                    let rate = reach.rate(speed, body(e), None);
+                    s.pose_shape(i, e);
+                    if s.aabbs[i].loosened(rate * (1.0 - t)).intersects(obstacle) {
+                        push(Pair::Obstacle(i as u16, o), rate);
+                    }
                 }
             }
             Pair::HeldLink(k, l) => {
@@ -650,6 +691,25 @@ impl CollisionChecker {
                     &|| e.hits_by_gjk(p, &*ob.shape.0, &ob.pose),
                     Hit::Obstacle(i as usize, o as usize),
                 )
+            }
+            Pair::LinkObstacle(l, o) => {
+                let l = l as usize;
+                let (centre, radius) = self.agent.link_spheres[l];
+                let obstacle = &self.obstacles.aabbs[o as usize];
+                let c = s.links[l] * centre;
+                let mut gap = (c - c.clamp(obstacle.mins, obstacle.maxs)).length() - radius;
+                if gap < remaining.min(SPLIT)
+                    && let Some((centre, half)) = self.agent.link_boxes[l]
+                {
+                    let link = &s.links[l];
+                    let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
+                    gap = gap.max(aabb_gap(&Aabb::new(c - h, c + h), obstacle));
+                }
+                if gap >= remaining.min(SPLIT) {
+                    Measure::Apart(gap, false)
+                } else {
+                    Measure::Split
+                }
             }
             Pair::Links(g) => {
                 let g = groups[g as usize];

@@ -331,6 +331,9 @@ pub struct SelfCollisionModel {
     /// Per link, the capsule (in the link's frame) that holds its shapes; `None` for a link
     /// without shapes.
     pub(super) link_capsules: Vec<Option<LinkCapsule>>,
+    /// Per link, a box in its frame (centre, half extents) that holds its shapes; `None` for
+    /// a link without shapes.
+    pub(super) link_boxes: Vec<Option<(Vector, Vector)>>,
     /// 0, 1, .. shapes.len() - 1.
     pub(super) all_shapes: Vec<u16>,
     /// How fast each link's points may move with the joints (for motion checks).
@@ -376,6 +379,18 @@ impl SelfCollisionModel {
             .map(|ids| {
                 let points: Vec<Vector> = ids.iter().flat_map(|&i| shapes[i].points()).collect();
                 LinkCapsule::enclosing(&points)
+            })
+            .collect();
+        let link_boxes = by_link
+            .iter()
+            .map(|ids| {
+                let mut points = ids.iter().flat_map(|&i| shapes[i].points());
+                let first = points.next()?;
+                let (lo, hi) = points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+                Some((
+                    (lo + hi) * 0.5,
+                    (hi - lo) * 0.5 + Vector::splat(BOUNDS_MARGIN),
+                ))
             })
             .collect();
         let bodies = Bodies {
@@ -542,6 +557,7 @@ impl SelfCollisionModel {
             groups,
             link_spheres,
             link_capsules,
+            link_boxes,
             allowed,
         }
     }
