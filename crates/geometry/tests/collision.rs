@@ -768,3 +768,41 @@ fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_h
         "{c:?}"
     );
 }
+
+/// A near pair of links of several shapes each is followed shape against link, then shape by
+/// shape: a fixed rod between the prongs of a turning fork is never hit; the peg beside it, on
+/// the same link, is, by a prong.
+#[test]
+fn the_prongs_of_a_turning_fork_miss_the_links_rod_between_them_and_hit_its_peg() {
+    let urdf = r#"<robot name="fork">
+      <link name="base"/>
+      <joint name="turn" type="revolute">
+        <parent link="base"/><child link="fork"/><axis xyz="1 0 0"/>
+        <limit lower="-3" upper="3" effort="1" velocity="1"/>
+      </joint>
+      <link name="fork">
+        <collision><origin xyz="0.25 0 0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
+        <collision><origin xyz="0.25 0 -0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
+      </link>
+      <joint name="hold" type="fixed"><parent link="base"/><child link="rod"/></joint>
+      <link name="rod">
+        <collision><origin xyz="0.25 0 0"/><geometry><box size="0.3 0.02 0.02"/></geometry></collision>
+        <collision><origin xyz="0.25 0.06 0"/><geometry><box size="0.04 0.01 0.01"/></geometry></collision>
+      </link>
+    </robot>"#;
+    let model = Arc::new(AgentModel::from_urdf_str(urdf, "fork.urdf").unwrap());
+    let agent = Arc::new(SelfCollisionModel::new(
+        model,
+        &SelfCollisionOptions::default(),
+    ));
+    assert!(agent.is_checked("fork", "rod").unwrap());
+    let checker = CollisionChecker::new(agent, Arc::new(StaticObstacles::empty()), Pose::IDENTITY);
+    let c = checker.check_motion(&[0.0], &[0.5], 1e-4);
+    assert!(c.contact.is_none(), "{c:?}");
+    let c = checker.check_motion(&[0.0], &[2.5], 1e-4);
+    assert!(
+        matches!(&c.contact, Some(Contact::SelfCollision { link_a, link_b })
+            if link_a == "fork" && link_b == "rod"),
+        "{c:?}"
+    );
+}

@@ -8,11 +8,12 @@
 //! ([`JointReach::local_step`]). Each pair of bodies is re-measured on its own schedule: a
 //! far pair once a motion, a near one as it comes closer. A link of several shapes (a mesh's
 //! convex pieces) is followed against an obstacle as one body, by its ball and box, and shape
-//! by shape once they come within [`SPLIT`], as a pair of links is. A pair nearer than `floor` is
-//! re-measured every `floor` of relative motion, so a contact between two measurements is at
-//! most `floor / 2` deep; elsewhere the motion is free everywhere, not only at sampled
-//! configurations. Distances are proven lower bounds (see [`support_gap`]), never GJK's
-//! witnesses alone.
+//! by shape once they come within [`SPLIT`]; a near pair of links, each shape of the link with
+//! fewer against the other link as a whole first, then shape by shape. A pair nearer than
+//! `floor` is re-measured every `floor` of relative motion, so a contact between two
+//! measurements is at most `floor / 2` deep; elsewhere the motion is free everywhere, not only
+//! at sampled configurations. Distances are proven lower bounds (see [`support_gap`]), never
+//! GJK's witnesses alone.
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Mat3, Pose, Vector};
@@ -190,6 +191,9 @@ enum Pair {
     LinkObstacle(u16, u32),
     /// A pair of links (an index into the checked groups), until it is near: then its shapes.
     Links(u32),
+    /// An agent shape and a link of several shapes (of a pair of links that is near), until
+    /// they are near: then the shape and each of the link's.
+    ShapeLink(u16, u16),
     /// Two agent shapes.
     Shapes(u16, u16),
     /// Held object and obstacle.
@@ -532,6 +536,7 @@ impl CollisionChecker {
                 (sphere(g.a as usize), Some(sphere(g.b as usize)))
             }
             Pair::Shapes(a, b) => (body(&shapes[a as usize]), Some(body(&shapes[b as usize]))),
+            Pair::ShapeLink(i, l) => (body(&shapes[i as usize]), Some(sphere(l as usize))),
             Pair::HeldObstacle(k, _) => (held_body(self.held_k(k)), None),
             Pair::HeldLink(k, l) => (held_body(self.held_k(k)), Some(sphere(l as usize))),
             Pair::HeldShape(k, i) => (held_body(self.held_k(k)), Some(body(&shapes[i as usize]))),
@@ -549,7 +554,7 @@ impl CollisionChecker {
     fn pose_shapes_of(&self, pair: Pair, s: &mut Scratch) {
         let shapes = &self.agent.shapes;
         match pair {
-            Pair::Obstacle(i, _) | Pair::HeldShape(_, i) => {
+            Pair::Obstacle(i, _) | Pair::HeldShape(_, i) | Pair::ShapeLink(i, _) => {
                 s.pose_shape(i as usize, &shapes[i as usize]);
             }
             Pair::Shapes(a, b) => {
@@ -673,7 +678,39 @@ impl CollisionChecker {
         match pair {
             Pair::Links(g) => {
                 let g = groups[g as usize];
+                let count = |l: u16| {
+                    let (start, end) = self.agent.link_shapes[l as usize];
+                    end - start
+                };
+                // The shapes of the link with fewer, each against the other link as a whole
+                // (where it has several), then shape by shape.
+                let (small, large) = match count(g.a) <= count(g.b) {
+                    true => (g.a, g.b),
+                    false => (g.b, g.a),
+                };
+                if count(large) > 1 {
+                    let (start, end) = self.agent.link_shapes[small as usize];
+                    for i in start..end {
+                        let e = &shapes[i as usize];
+                        let rate = reach.rate(speed, body(e), Some(self.link_body(large as usize)));
+                        push(Pair::ShapeLink(i, large), rate);
+                    }
+                    return;
+                }
                 for &(a, b) in &self.agent.pairs[g.start as usize..g.end as usize] {
+                    let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
+                    let rate = reach.rate(speed, body(ea), Some(body(eb)));
+                    push(Pair::Shapes(a, b), rate);
+                }
+            }
+            Pair::ShapeLink(i, l) => {
+                let (start, end) = self.agent.link_shapes[l as usize];
+                for j in start..end {
+                    // In the order of the pair of links (the lower link's shape first).
+                    let (a, b) = match shapes[i as usize].link < l as usize {
+                        true => (i, j),
+                        false => (j, i),
+                    };
                     let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
                     let rate = reach.rate(speed, body(ea), Some(body(eb)));
                     push(Pair::Shapes(a, b), rate);
@@ -682,10 +719,8 @@ impl CollisionChecker {
             Pair::LinkObstacle(l, o) => {
                 // The shapes that may reach the obstacle in the rest of the motion.
                 let obstacle = &self.obstacles.aabbs[o as usize];
-                for (i, e) in shapes.iter().enumerate() {
-                    if e.link != l as usize {
-                        continue;
-                    }
+                let (start, end) = self.agent.link_shapes[l as usize];
+                for (i, e) in (start as usize..).zip(&shapes[start as usize..end as usize]) {
                     let rate = reach.rate(speed, body(e), None);
                     s.pose_shape(i, e);
                     if s.aabbs[i].loosened(rate * (1.0 - t)).intersects(obstacle) {
@@ -776,6 +811,23 @@ impl CollisionChecker {
                     let link = &s.links[l];
                     let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
                     gap = gap.max(aabb_gap(&Aabb::new(c - h, c + h), obstacle));
+                }
+                if gap >= remaining.min(SPLIT) {
+                    Measure::Apart(gap, false)
+                } else {
+                    Measure::Split
+                }
+            }
+            Pair::ShapeLink(i, l) => {
+                let (e, l) = (&shapes[i as usize], l as usize);
+                let (c, r) = ball(e, &s.poses[i as usize]);
+                let mut gap = (c - s.centres[l]).length() - r - self.agent.link_spheres[l].1;
+                if gap < remaining.min(SPLIT)
+                    && let Some((centre, half)) = self.agent.link_boxes[l]
+                {
+                    let link = &s.links[l];
+                    let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
+                    gap = gap.max(aabb_gap(&s.aabbs[i as usize], &Aabb::new(c - h, c + h)));
                 }
                 if gap >= remaining.min(SPLIT) {
                     Measure::Apart(gap, false)

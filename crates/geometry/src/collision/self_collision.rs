@@ -334,6 +334,8 @@ pub struct SelfCollisionModel {
     /// Per link, a box in its frame (centre, half extents) that holds its shapes; `None` for
     /// a link without shapes.
     pub(super) link_boxes: Vec<Option<(Vector, Vector)>>,
+    /// Per link, its shapes: `shapes[start..end]` (a link's shapes are consecutive).
+    pub(super) link_shapes: Vec<(u16, u16)>,
     /// 0, 1, .. shapes.len() - 1.
     pub(super) all_shapes: Vec<u16>,
     /// How fast each link's points may move with the joints (for motion checks).
@@ -391,6 +393,13 @@ impl SelfCollisionModel {
                     (lo + hi) * 0.5,
                     (hi - lo) * 0.5 + Vector::splat(BOUNDS_MARGIN),
                 ))
+            })
+            .collect();
+        let link_shapes = by_link
+            .iter()
+            .map(|ids| match (ids.first(), ids.last()) {
+                (Some(&a), Some(&b)) => (a as u16, b as u16 + 1),
+                _ => (0, 0),
             })
             .collect();
         let bodies = Bodies {
@@ -558,6 +567,7 @@ impl SelfCollisionModel {
             link_spheres,
             link_capsules,
             link_boxes,
+            link_shapes,
             allowed,
         }
     }
