@@ -271,8 +271,16 @@ fn occluders_in<'w>(
                 continue; // without visiting a mesh piece's vertices for its exact bounds
             }
         }
-        let bb = b.shape.compute_aabb(&b.pose);
-        if !bb.intersects(region) || b.shape.contains_point(&b.pose, e) {
+        // A convex polyhedron's world box from its own (a few operations; its exact box
+        // visits every vertex, as does the test of the eye inside it).
+        let hull = b.shape.as_convex_polyhedron();
+        let bb = match hull {
+            Some(hull) => hull.local_aabb().transform_by(&b.pose),
+            None => b.shape.compute_aabb(&b.pose),
+        };
+        if !bb.intersects(region)
+            || (bb.contains_local_point(e) && b.shape.contains_point(&b.pose, e))
+        {
             continue;
         }
         match b.shape.as_compound() {
@@ -295,8 +303,7 @@ fn occluders_in<'w>(
                 pose: b.pose,
                 part: None,
                 shape: &**b.shape,
-                local: (b.shape.as_convex_polyhedron())
-                    .map(|hull| hull.local_aabb().loosened(LOCAL_SLACK)),
+                local: hull.map(|hull| hull.local_aabb().loosened(LOCAL_SLACK)),
             }),
         }
     }
