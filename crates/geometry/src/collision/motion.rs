@@ -255,7 +255,8 @@ const BATCH: f32 = 0.02;
 /// exact distance is measured.
 const CHEAP_ENOUGH: f32 = 0.02;
 
-/// A link nearer than this (metres, by bounding spheres) is measured shape by shape.
+/// A link nearer than this to another link or an obstacle, or a shape nearer than this to a
+/// link (metres, by balls and boxes), is measured part by part.
 const SPLIT: f32 = 0.03;
 
 /// What a motion check found, and how many configurations it posed.
@@ -592,8 +593,11 @@ impl CollisionChecker {
         items
     }
 
-    /// Replaces a near pair of links, or a held object near a link, by its pairs of shapes,
-    /// due at `t`.
+    /// Replaces a near pair of bodies by pairs of their parts, due at `t`: a pair of links by
+    /// each shape of the link with fewer against the other link where that one has several
+    /// shapes, else by their pairs of shapes; a shape against a link by the pairs of shapes; a
+    /// link against an obstacle by its shapes that may reach the obstacle in the rest of the
+    /// motion; a held object near a link by the object against the link's shapes.
     fn split(
         &self,
         (speed, groups): (&[f32], &[PairGroup]),
@@ -623,12 +627,12 @@ impl CollisionChecker {
                         let rate = reach.rate(speed, body(e), Some(self.link_body(large as usize)));
                         push(Pair::ShapeLink(i, large), rate);
                     }
-                    return;
-                }
-                for &(a, b) in &self.agent.pairs[g.start as usize..g.end as usize] {
-                    let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
-                    let rate = reach.rate(speed, body(ea), Some(body(eb)));
-                    push(Pair::Shapes(a, b), rate);
+                } else {
+                    for &(a, b) in &self.agent.pairs[g.start as usize..g.end as usize] {
+                        let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
+                        let rate = reach.rate(speed, body(ea), Some(body(eb)));
+                        push(Pair::Shapes(a, b), rate);
+                    }
                 }
             }
             Pair::ShapeLink(i, l) => {
