@@ -717,12 +717,11 @@ fn base_sweeps_answer_as_the_full_check() {
     assert!(in_band <= 5, "{in_band} answers differ within the band");
 }
 
-/// A link of several shapes is followed against an obstacle as one body until they are
-/// near, then shape by shape: a rod along the axis of a turning fork, between its prongs
-/// (inside the link's box all along), is never hit; a peg beside the axis is, by a prong.
-#[test]
-fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_hit() {
-    let urdf = r#"<robot name="fork">
+/// A fork turning about x on a base (two prongs, at z = +-0.06 along x from 0.1 to 0.4), and
+/// `more` (URDF elements) beside it, with its self-collision pairs.
+fn fork_with(more: &str) -> Arc<SelfCollisionModel> {
+    let urdf = format!(
+        r#"<robot name="fork">
       <link name="base"/>
       <joint name="turn" type="revolute">
         <parent link="base"/><child link="fork"/><axis xyz="1 0 0"/>
@@ -732,12 +731,22 @@ fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_h
         <collision><origin xyz="0.25 0 0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
         <collision><origin xyz="0.25 0 -0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
       </link>
-    </robot>"#;
-    let model = Arc::new(AgentModel::from_urdf_str(urdf, "fork.urdf").unwrap());
-    let agent = Arc::new(SelfCollisionModel::new(
+      {more}
+    </robot>"#
+    );
+    let model = Arc::new(AgentModel::from_urdf_str(&urdf, "fork.urdf").unwrap());
+    Arc::new(SelfCollisionModel::new(
         model,
         &SelfCollisionOptions::default(),
-    ));
+    ))
+}
+
+/// A link of several shapes is followed against an obstacle as one body until they are
+/// near, then shape by shape: a rod along the axis of a turning fork, between its prongs
+/// (inside the link's box all along), is never hit; a peg beside the axis is, by a prong.
+#[test]
+fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_hit() {
+    let agent = fork_with("");
     let rod = boxed(
         "rod",
         Vector::new(0.25, 0.0, 0.0),
@@ -774,27 +783,13 @@ fn a_rod_between_the_prongs_of_a_turning_fork_is_missed_and_a_peg_beside_it_is_h
 /// the same link, is, by a prong.
 #[test]
 fn the_prongs_of_a_turning_fork_miss_the_links_rod_between_them_and_hit_its_peg() {
-    let urdf = r#"<robot name="fork">
-      <link name="base"/>
-      <joint name="turn" type="revolute">
-        <parent link="base"/><child link="fork"/><axis xyz="1 0 0"/>
-        <limit lower="-3" upper="3" effort="1" velocity="1"/>
-      </joint>
-      <link name="fork">
-        <collision><origin xyz="0.25 0 0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
-        <collision><origin xyz="0.25 0 -0.06"/><geometry><box size="0.3 0.04 0.02"/></geometry></collision>
-      </link>
-      <joint name="hold" type="fixed"><parent link="base"/><child link="rod"/></joint>
+    let agent = fork_with(
+        r#"<joint name="hold" type="fixed"><parent link="base"/><child link="rod"/></joint>
       <link name="rod">
         <collision><origin xyz="0.25 0 0"/><geometry><box size="0.3 0.02 0.02"/></geometry></collision>
         <collision><origin xyz="0.25 0.06 0"/><geometry><box size="0.04 0.01 0.01"/></geometry></collision>
-      </link>
-    </robot>"#;
-    let model = Arc::new(AgentModel::from_urdf_str(urdf, "fork.urdf").unwrap());
-    let agent = Arc::new(SelfCollisionModel::new(
-        model,
-        &SelfCollisionOptions::default(),
-    ));
+      </link>"#,
+    );
     assert!(agent.is_checked("fork", "rod").unwrap());
     let checker = CollisionChecker::new(agent, Arc::new(StaticObstacles::empty()), Pose::IDENTITY);
     let c = checker.check_motion(&[0.0], &[0.5], 1e-4);

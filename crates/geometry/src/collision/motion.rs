@@ -16,7 +16,7 @@
 //! GJK's witnesses alone.
 
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::math::{Mat3, Pose, Vector};
+use parry3d::math::{Pose, Vector};
 use parry3d::query;
 use parry3d::query::gjk::{CsoPoint, VoronoiSimplex};
 use parry3d::shape::{Compound, Shape, SupportMap};
@@ -738,34 +738,22 @@ impl CollisionChecker {
                 let c = s.links[l] * centre;
                 let mut gap = (c - c.clamp(obstacle.mins, obstacle.maxs)).length() - radius;
                 if gap < remaining.min(SPLIT)
-                    && let Some((centre, half)) = self.agent.link_boxes[l]
+                    && let Some(b) = self.agent.link_box(l, &s.links[l])
                 {
-                    let link = &s.links[l];
-                    let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
-                    gap = gap.max(aabb_gap(&Aabb::new(c - h, c + h), obstacle));
+                    gap = gap.max(aabb_gap(&b, obstacle));
                 }
-                if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap, false)
-                } else {
-                    Measure::Split
-                }
+                apart_or_split(gap, remaining)
             }
             Pair::ShapeLink(i, l) => {
                 let (e, l) = (&shapes[i as usize], l as usize);
                 let (c, r) = ball(e, &s.poses[i as usize]);
                 let mut gap = (c - s.centres[l]).length() - r - self.agent.link_spheres[l].1;
                 if gap < remaining.min(SPLIT)
-                    && let Some((centre, half)) = self.agent.link_boxes[l]
+                    && let Some(b) = self.agent.link_box(l, &s.links[l])
                 {
-                    let link = &s.links[l];
-                    let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
-                    gap = gap.max(aabb_gap(&s.aabbs[i as usize], &Aabb::new(c - h, c + h)));
+                    gap = gap.max(aabb_gap(&s.aabbs[i as usize], &b));
                 }
-                if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap, false)
-                } else {
-                    Measure::Split
-                }
+                apart_or_split(gap, remaining)
             }
             Pair::Links(g) => {
                 let g = groups[g as usize];
@@ -775,11 +763,7 @@ impl CollisionChecker {
                 if gap < remaining.min(SPLIT) {
                     gap = gap.max(self.agent.capsule_gap(&g, &s.links));
                 }
-                if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap, false)
-                } else {
-                    Measure::Split
-                }
+                apart_or_split(gap, remaining)
             }
             Pair::HeldLink(k, l) => {
                 let (h, p) = held(k);
@@ -791,11 +775,7 @@ impl CollisionChecker {
                             .capsule_ball_gap(l, &s.links[l], p.translation, h.radius);
                     gap = gap.max(capsule);
                 }
-                if gap >= remaining.min(SPLIT) {
-                    Measure::Apart(gap, false)
-                } else {
-                    Measure::Split
-                }
+                apart_or_split(gap, remaining)
             }
             Pair::Shapes(a, b) => {
                 let (ea, eb) = (&shapes[a as usize], &shapes[b as usize]);
@@ -850,6 +830,16 @@ impl CollisionChecker {
                 )
             }
         }
+    }
+}
+
+/// What a bound `gap` on a pair of links (or a link and a body) says where the pair may still
+/// move `remaining`: apart, or near enough to be measured part by part ([`SPLIT`]).
+fn apart_or_split(gap: f32, remaining: f32) -> Measure {
+    if gap >= remaining.min(SPLIT) {
+        Measure::Apart(gap, false)
+    } else {
+        Measure::Split
     }
 }
 

@@ -572,6 +572,14 @@ impl SelfCollisionModel {
         }
     }
 
+    /// The world box of link `l` at pose `link` that holds its shapes (that of its box in its
+    /// frame); `None` for a link without shapes.
+    pub(super) fn link_box(&self, l: usize, link: &Pose) -> Option<Aabb> {
+        let (centre, half) = self.link_boxes[l]?;
+        let (c, h) = (*link * centre, Mat3::from_quat(link.rotation).abs() * half);
+        Some(Aabb::new(c - h, c + h))
+    }
+
     /// A lower bound on the distance between the links of `group` at world poses `links` by
     /// their capsules; negative infinity (no bound) for a pair of at most [`CAPSULE_PAIRS`]
     /// shape pairs, whose shapes cost no more to test than the capsules.
