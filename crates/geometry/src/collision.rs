@@ -402,6 +402,9 @@ struct Scratch {
     stamps: Vec<u32>,
     /// Counts the link posings.
     generation: u32,
+    /// Per shape pair of the self-collision model (`agent`'s address), the axis that last
+    /// separated its shapes, in the first shape's frame (zero: none).
+    axes: (usize, Vec<Vector>),
 }
 
 impl Scratch {
@@ -871,14 +874,20 @@ impl CollisionChecker {
         with_held: bool,
         mut report: impl FnMut(Hit) -> bool,
     ) {
+        let model_id = Arc::as_ptr(&self.agent) as usize;
+        if s.axes.0 != model_id || s.axes.1.len() != self.agent.pairs.len() {
+            s.axes = (model_id, vec![Vector::ZERO; self.agent.pairs.len()]);
+        }
         let Scratch {
             links,
             poses,
             aabbs,
             candidates,
             centres,
+            axes,
             ..
         } = s;
+        let axes = &mut axes.1;
         let shapes = &self.agent.shapes;
         // Agent against the scene: first the obstacles near the moving shapes, then per shape.
         if !self.obstacles.is_empty() && !moving.is_empty() {
@@ -916,7 +925,12 @@ impl CollisionChecker {
                 {
                     continue;
                 }
-                for &(a, b) in &pairs[g.start as usize..g.end as usize] {
+                for (k, &(a, b)) in pairs
+                    .iter()
+                    .enumerate()
+                    .take(g.end as usize)
+                    .skip(g.start as usize)
+                {
                     let (a, b) = (a as usize, b as usize);
                     let r = shapes[a].radius + shapes[b].radius;
                     if (poses[a].translation - poses[b].translation).length_squared() > r * r {
@@ -931,7 +945,8 @@ impl CollisionChecker {
                     {
                         continue;
                     }
-                    if shapes[a].hits_shape_by_gjk(&poses[a], &shapes[b], &poses[b])
+                    let axis = &mut axes[k];
+                    if shapes[a].hits_shape_with_axis(&poses[a], &shapes[b], &poses[b], axis)
                         && report(Hit::SelfPair(a, b))
                     {
                         return;

@@ -801,3 +801,50 @@ fn the_prongs_of_a_turning_fork_miss_the_links_rod_between_them_and_hit_its_peg(
         "{c:?}"
     );
 }
+
+/// A pair's separating axis, kept from one check for the next, never hides a collision: a bar
+/// turned from 5 mm beside a post into it is found to hit it, and free again when turned back.
+#[test]
+fn a_separating_axis_kept_between_checks_never_hides_a_collision() {
+    let joint = |name: &str, parent: &str, child: &str| {
+        format!(
+            r#"<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>
+            <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>"#
+        )
+    };
+    // Three joints: the pair's pose depends on more than two, so no cells prove it apart.
+    let urdf = format!(
+        r#"<robot name="bar">
+      <link name="base"/>
+      <joint name="mount" type="fixed"><parent link="base"/><child link="post"/><origin xyz="0 0.5 0"/></joint>
+      <link name="post"><collision><geometry><box size="0.05 0.05 0.5"/></geometry></collision></link>
+      {}<link name="a"/>{}<link name="b"/>{}
+      <link name="bar"><collision><origin xyz="0.3 0 0"/><geometry><box size="0.4 0.04 0.04"/></geometry></collision></link>
+    </robot>"#,
+        joint("ja", "base", "a"),
+        joint("jb", "a", "b"),
+        joint("jc", "b", "bar")
+    );
+    let model = Arc::new(AgentModel::from_urdf_str(&urdf, "bar.urdf").unwrap());
+    let agent = Arc::new(SelfCollisionModel::new(
+        model,
+        &SelfCollisionOptions::default(),
+    ));
+    let checker = CollisionChecker::new(
+        agent.clone(),
+        Arc::new(StaticObstacles::empty()),
+        Pose::IDENTITY,
+    );
+    let (beside, into) = ([1.4708, 0.0, 0.0], [0.8, 0.7708, 0.0]);
+    for _ in 0..3 {
+        assert!(checker.is_config_free(&beside));
+        assert!(!checker.is_config_free(&into));
+        assert!(
+            matches!(
+                checker.first_collision(&into),
+                Some(Contact::SelfCollision { .. })
+            ),
+            "the bar in the post"
+        );
+    }
+}

@@ -1,9 +1,11 @@
 //! A support function that climbs a hull's vertex graph instead of visiting every vertex, for
 //! GJK's exact tests of the large hulls of real robots' meshes.
 //!
-//! (Warm-starting those tests from each pair's last separating direction, kept between checks,
+//! (Warm-starting parry's GJK from each pair's last separating direction, kept between checks,
 //! was tried on 2026-12-06 and removed: in one plan it let a human's reach pass through a
-//! robot finger that a fresh check finds; the cause was not found.)
+//! robot finger that a fresh check finds; the cause was not found. A kept axis is now only
+//! tried as a proof of its own, the shapes' supports along it, before a cold GJK: see
+//! `ShapeEntry::hits_shape_with_axis`.)
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};

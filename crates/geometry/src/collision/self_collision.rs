@@ -7,6 +7,8 @@ use std::sync::Arc;
 
 use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Mat3, Pose, Vector};
+use parry3d::query::details::intersection_test_support_map_support_map_with_params;
+use parry3d::query::gjk::VoronoiSimplex;
 use parry3d::shape::{Cuboid, Shape, SharedShape, SupportMap};
 
 use super::climbing_hull::{ClimbingHull, climbing_hull_of, gjk};
@@ -270,7 +272,19 @@ impl ShapeEntry {
         let (Some(a), Some(b)) = (self.support(), other.support()) else {
             return self.hits_shape(pose, other, other_pose);
         };
-        let boxes_meet = match (&self.bounds, &other.bounds) {
+        self.boxes_meet(pose, other, other_pose, (a, b)) && gjk(pose, a, other_pose, b)
+    }
+
+    /// Whether the bounding boxes of two agent shapes (the shapes themselves where they have
+    /// none; `a`, `b` their supports) meet.
+    fn boxes_meet(
+        &self,
+        pose: &Pose,
+        other: &ShapeEntry,
+        other_pose: &Pose,
+        (a, b): (&dyn SupportMap, &dyn SupportMap),
+    ) -> bool {
+        match (&self.bounds, &other.bounds) {
             (None, None) => true,
             // Two boxes: the separating-axis test, exact and cheaper than GJK.
             (Some((at, ca)), Some((bt, cb))) => {
@@ -280,8 +294,33 @@ impl ShapeEntry {
                 let ((pa, ba), (pb, bb)) = (self.bound(pose, a), other.bound(other_pose, b));
                 gjk(&pa, ba, &pb, bb)
             }
+        }
+    }
+
+    /// [`ShapeEntry::hits_shape_by_gjk`], first trying `axis` (in this shape's frame, from a
+    /// former check of the pair): shapes apart along it by more than [`AXIS_GAP`] do not
+    /// meet, whatever the axis's origin. Where it fails, `axis` becomes the one GJK found, or
+    /// zero where the shapes meet.
+    pub(super) fn hits_shape_with_axis(
+        &self,
+        pose: &Pose,
+        other: &ShapeEntry,
+        other_pose: &Pose,
+        axis: &mut Vector,
+    ) -> bool {
+        let (Some(a), Some(b)) = (self.support(), other.support()) else {
+            return self.hits_shape(pose, other, other_pose);
         };
-        boxes_meet && gjk(pose, a, other_pose, b)
+        let pos12 = pose.inv_mul(other_pose);
+        if *axis != Vector::ZERO && gap_along(&pos12, (a, b), *axis) > AXIS_GAP {
+            return false;
+        }
+        if !self.boxes_meet(pose, other, other_pose, (a, b)) {
+            return false;
+        }
+        let (hit, dir) = separation(&pos12, (a, b));
+        *axis = dir;
+        hit
     }
 
     /// Whether two agent shapes intersect: their bounding boxes first, then the exact shapes.
@@ -293,6 +332,38 @@ impl ShapeEntry {
         }
         self.hits(pose, &*other.shape.0, other_pose)
     }
+}
+
+/// How far apart (metres) two shapes must be along a cached axis for it to prove them apart.
+const AXIS_GAP: f32 = 1e-5;
+
+/// GJK's exact intersection test of `a` and `b` (at `pos12` in `a`'s frame), as
+/// [`gjk`], and where they are apart, the axis it found that separates them by more than
+/// [`AXIS_GAP`] (zero where none does).
+fn separation(pos12: &Pose, (a, b): (&dyn SupportMap, &dyn SupportMap)) -> (bool, Vector) {
+    let (hit, dir) = intersection_test_support_map_support_map_with_params(
+        pos12,
+        a,
+        b,
+        &mut VoronoiSimplex::new(),
+        None,
+    );
+    if hit {
+        return (true, Vector::ZERO);
+    }
+    let apart = [dir, -dir].into_iter().find_map(|d| {
+        d.try_normalize()
+            .filter(|&d| gap_along(pos12, (a, b), d) > AXIS_GAP)
+    });
+    (false, apart.unwrap_or(Vector::ZERO))
+}
+
+/// How far `b` (at `pos12` in `a`'s frame) lies beyond `a` along unit `axis` (`a`'s frame):
+/// positive where the axis separates them.
+fn gap_along(pos12: &Pose, (a, b): (&dyn SupportMap, &dyn SupportMap), axis: Vector) -> f32 {
+    let far_a = axis.dot(a.local_support_point(axis));
+    let near_b = pos12 * b.local_support_point(pos12.rotation.inverse() * -axis);
+    axis.dot(near_b) - far_a
 }
 
 /// A pair of links whose shapes are tested against each other: links `a < b`, their shape
