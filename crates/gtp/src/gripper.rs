@@ -82,8 +82,9 @@ pub struct GripperModel {
     /// The finger joint's limits as an opening, to clamp openings to.
     opening_range: (f32, f32),
     /// For a finger joint that turns (a revolute joint, as the PR2's): (jaw gap, joint value)
-    /// pairs from the joint's lower limit to its upper, measured between the fingers' boxes;
-    /// empty for a sliding finger, whose value is half the opening.
+    /// pairs from the narrowest gap to the widest, measured between the fingers' boxes over the
+    /// joint's range (from its lower limit or from its upper, whichever closes the jaws); empty
+    /// for a sliding finger, whose value is half the opening.
     turns: Vec<(f32, f32)>,
     /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
     /// by it).
@@ -202,6 +203,30 @@ impl GripperModel {
         self.turns.last().map_or(first, |&(_, v)| v)
     }
 
+    /// The jaw opening of finger joint value `value`: the inverse of
+    /// [`GripperModel::joint_value`] (twice the value for a sliding finger; for a turning one,
+    /// the measured gap at the value, interpolated), within the opening range.
+    pub fn opening_at(&self, value: f32) -> f32 {
+        let (lo, hi) = self.opening_range;
+        if self.turns.is_empty() {
+            return (2.0 * value).clamp(lo, hi);
+        }
+        for w in self.turns.windows(2) {
+            let ((g0, v0), (g1, v1)) = (w[0], w[1]);
+            let (vmin, vmax) = (v0.min(v1), v0.max(v1));
+            if (vmin..=vmax).contains(&value) && v1 != v0 {
+                return g0 + (value - v0) / (v1 - v0) * (g1 - g0);
+            }
+        }
+        // Past the measured values: the nearer end's gap.
+        let (first, last) = (self.turns[0], self.turns[self.turns.len() - 1]);
+        if (value - first.1).abs() <= (value - last.1).abs() {
+            first.0
+        } else {
+            last.0
+        }
+    }
+
     /// The boxes in the tool frame with the finger joint at `value`.
     fn boxes_at_value(&self, value: f32) -> Vec<(Pose, Cuboid)> {
         let to_tool = pose_along(&self.tool_path, value).inverse();
@@ -219,13 +244,22 @@ impl GripperModel {
     /// +y against those on -y; without boxes on both sides the joint is taken as sliding.
     fn measure_turns(&mut self, limits: geometry::agent::JointLimits) {
         const STEPS: usize = 64;
-        let mut turns: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
+        let mut measured: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
         for i in 0..=STEPS {
             let value = limits.lower + (limits.upper - limits.lower) * i as f32 / STEPS as f32;
             let Some(gap) = self.finger_gap(value) else {
                 return;
             };
-            // Keep the gap growing with the value: a joint past its widest is not used.
+            measured.push((gap, value));
+        }
+        // The jaws open as the value grows (the PR2's) or as it falls (a Robotiq 2F-85's
+        // knuckle closes them as it grows): walk from the value of the narrower end.
+        if measured[STEPS].0 < measured[0].0 {
+            measured.reverse();
+        }
+        let mut turns: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
+        for (gap, value) in measured {
+            // Keep the gap growing: a joint past its widest is not used.
             if turns.last().is_none_or(|&(g, _)| gap > g) {
                 turns.push((gap, value));
             }
@@ -608,11 +642,20 @@ pub(crate) mod tests {
 
     /// [`turning_finger_model`] with each pad the geometry `pad` (URDF) 8 cm ahead of its knuckle.
     fn turning_finger_model_with(pad: &str) -> AgentModel {
+        turning_finger_model_turned(pad, 1.0)
+    }
+
+    /// [`turning_finger_model_with`], the fingers' joints turning them in at `sense` -1 (a
+    /// Robotiq 2F-85's knuckles close the jaws as their value grows): each finger then sits
+    /// turned out by 0.5 rad at 0, straight at the upper limit.
+    fn turning_finger_model_turned(pad: &str, sense: f32) -> AgentModel {
+        let yaw = if sense < 0.0 { 0.5 } else { 0.0 };
         let finger = |side: &str, y: f32, axis: f32, mimic: &str| {
+            let (axis, yaw) = (axis * sense, yaw * axis);
             format!(
                 r#"<link name="{side}_finger"><collision><origin xyz="0.08 0 0"/><geometry>{pad}</geometry></collision></link>
                 <joint name="{side}_finger_joint" type="revolute"><parent link="palm"/><child link="{side}_finger"/>
-                  <origin xyz="0.02 {y} 0"/><axis xyz="0 0 {axis}"/><limit lower="0" upper="0.5" effort="1" velocity="1"/>{mimic}</joint>"#
+                  <origin xyz="0.02 {y} 0" rpy="0 0 {yaw}"/><axis xyz="0 0 {axis}"/><limit lower="0" upper="0.5" effort="1" velocity="1"/>{mimic}</joint>"#
             )
         };
         let urdf = format!(
@@ -655,6 +698,29 @@ pub(crate) mod tests {
             hi.y - lo.y
         };
         assert!(span(0.07) > span(0.03) + 0.03);
+    }
+
+    #[test]
+    fn a_finger_that_closes_as_its_joint_turns_on_opens_the_jaws_as_it_turns_back() {
+        let model = turning_finger_model_turned(r#"<box size="0.02 0.01 0.02"/>"#, -1.0);
+        let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
+        // Straight at the upper limit (0.5 rad): the pads 20 mm apart; turned out at 0.
+        let (lo, hi) = gripper.opening_range;
+        assert!((lo - 0.02).abs() < 1e-3, "closed gap {lo}");
+        assert!(hi > 0.07 && hi < 0.1, "widest gap {hi}");
+        let mut last = f32::INFINITY;
+        for opening in [0.03, 0.05, 0.07] {
+            let value = gripper.joint_value(opening);
+            assert!(
+                value > 0.0 && value < 0.5 && value < last,
+                "{opening}: {value}"
+            );
+            last = value;
+            let gap = gripper.finger_gap(value).expect("pads on both sides");
+            assert!((gap - opening).abs() < 1e-3, "{opening}: gap {gap}");
+            let back = gripper.opening_at(value);
+            assert!((back - opening).abs() < 1e-4, "{opening}: {back}");
+        }
     }
 
     #[test]

@@ -162,8 +162,25 @@ fn pick_then_place_on_the_desk() {
     assert!(placed.world.attachment(book).is_none());
     assert!(on(&placed.world, book, desk, 0.05));
     rests_free(&placed.world, book);
-    // The grasp was kept: no pick phase in the second plan.
+    // The grasp was kept: no pick phase in the second plan, and the jaws stay as the pick
+    // closed them while they carry the book.
     assert!(placed.summary.grasp.as_ref().unwrap().id.is_none());
+    let gripped = picked.summary.trajectories.last().unwrap().gripper_opening;
+    let carried: Vec<_> = placed
+        .summary
+        .trajectories
+        .iter()
+        .filter(|t| t.held.is_some())
+        .collect();
+    assert!(!carried.is_empty());
+    for t in carried {
+        let o = t.gripper_opening;
+        assert!(
+            (o - gripped).abs() < 1e-4,
+            "{:?}: jaws {o} m, gripped at {gripped} m",
+            t.phase
+        );
+    }
 }
 
 #[test]

@@ -116,12 +116,19 @@ fn held_choice(
             )
         })?;
     let tool_in_object = grasp.inverse();
-    // The jaws close along the tool's y axis: the object's extent along it (its box's, exact
-    // for the boxes' axis-aligned grasps) is the grasp's width.
-    let close = (tool_in_object.rotation * Vector::Y).abs();
-    let h = model.local_aabb.half_extents();
-    let max_opening = setup.arms[arm].gripper.max_opening;
-    let width = (2.0 * close.dot(h)).min(max_opening);
+    let gripper = &setup.arms[arm].gripper;
+    let max_opening = gripper.max_opening;
+    // The grasp's width is the jaws' opening now: carried, the object stays gripped as it is.
+    // A hand without a finger joint: the object's extent along the tool's y, the axis the
+    // jaws close along (its box's, exact for the boxes' axis-aligned grasps).
+    let q = &world.agent_state(setup.agent).q;
+    let width = match setup.arms[arm].gripper_dof {
+        Some(k) => gripper.opening_at(q[k]),
+        None => {
+            let close = (tool_in_object.rotation * Vector::Y).abs();
+            (2.0 * close.dot(model.local_aabb.half_extents())).min(max_opening)
+        }
+    };
     Ok(Choice {
         arm,
         grasp: Grasp {
