@@ -216,11 +216,12 @@ pub fn generate_grasps(
 }
 
 /// The jaw opening at which the fingers, closing on `shape` with the tool at `tool`, stop:
-/// `width` (the contacts' distance) when the gripper's boxes clear the object there, else the
-/// narrowest opening up to `opening` (where they clear) at which they do, to 0.1 mm. Closing
-/// across a tilted axis (inside the friction cone), a flat pad meets a box's edge before
-/// the contact point: held at `width`, it would stand millimetres inside the object (the
-/// Panda's pads 2 mm inside the POS machine).
+/// `width` (the contacts' distance) when the gripper's own shapes clear the object there, else
+/// the narrowest opening up to `opening` at which they do, to 0.1 mm. Closing across a tilted
+/// axis (inside the friction cone), a flat pad meets a box's edge before the contact point:
+/// held at `width`, it would stand millimetres inside the object (the Panda's pads 2 mm inside
+/// the POS machine). The shapes, not their boxes: a Robotiq 2F-85's linkage, boxed, stopped
+/// its jaws 1 cm short of the object on each side.
 fn closed_width(
     gripper: &GripperModel,
     tool: &Pose,
@@ -228,7 +229,7 @@ fn closed_width(
     width: f32,
     opening: f32,
 ) -> f32 {
-    let clear = |w: f32| !gripper.at(w).intersects(tool, shape, &Pose::IDENTITY);
+    let clear = |w: f32| !gripper.shapes_meet(w, tool, shape, &Pose::IDENTITY);
     if clear(width) {
         return width;
     }
@@ -519,11 +520,12 @@ mod tests {
                 "{exits:?} {}",
                 g.width
             );
-            // Neither open nor closed does the gripper enter the object.
-            for w in [g.opening, g.width] {
-                let gripper = pr2_gripper().at(w);
-                assert!(!gripper.intersects(&g.tool_in_object, shape, &Pose::IDENTITY));
-            }
+            // Neither open (its boxes) nor closed (its shapes) does the gripper enter the
+            // object.
+            let gripper = pr2_gripper();
+            let open = gripper.at(g.opening);
+            assert!(!open.intersects(&g.tool_in_object, shape, &Pose::IDENTITY));
+            assert!(!gripper.shapes_meet(g.width, &g.tool_in_object, shape, &Pose::IDENTITY));
         }
         for w in set.grasps.windows(2) {
             assert!(w[0].score <= w[1].score);

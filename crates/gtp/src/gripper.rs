@@ -227,6 +227,28 @@ impl GripperModel {
         }
     }
 
+    /// Whether the gripper's own collision shapes (not their boxes: a linkage's pieces, boxed,
+    /// reach into the jaws), the jaws `opening` apart and the tool at `tool`, meet `shape` at
+    /// `pose`; shape pairs parry cannot test count as meeting.
+    pub fn shapes_meet(&self, opening: f32, tool: &Pose, shape: &dyn Shape, pose: &Pose) -> bool {
+        let opening = opening.clamp(self.opening_range.0, self.opening_range.1);
+        let value = self.joint_value(opening);
+        let to_tool = *tool * pose_along(&self.tool_path, value).inverse();
+        self.links.iter().any(|link| {
+            let at_link = to_tool * pose_along(&link.path, value);
+            link.boxes.iter().any(|b| {
+                let at = at_link * b.in_link;
+                let own: &dyn Shape = match &b.shape {
+                    Some(s) => &**s,
+                    None => &b.cuboid,
+                };
+                query::intersection_test(&at, own, pose, shape)
+                    .map(|hit| hit.intersecting)
+                    .unwrap_or(true)
+            })
+        })
+    }
+
     /// The boxes in the tool frame with the finger joint at `value`.
     fn boxes_at_value(&self, value: f32) -> Vec<(Pose, Cuboid)> {
         let to_tool = pose_along(&self.tool_path, value).inverse();
@@ -721,6 +743,30 @@ pub(crate) mod tests {
             let back = gripper.opening_at(value);
             assert!((back - opening).abs() < 1e-4, "{opening}: {back}");
         }
+    }
+
+    #[test]
+    fn the_gripper_shapes_meet_less_than_their_boxes() {
+        // Ball pads (1 cm radius): a 4 mm cube off a pad's centre along the diagonal, 1.5 cm
+        // away (its nearest corner 1.15 cm), sits in the corner of the ball's box but misses
+        // the ball.
+        let model = turning_finger_model_with(r#"<sphere radius="0.01"/>"#);
+        let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
+        let opening = 0.05;
+        let at = gripper.at(opening);
+        let (pad, _) = at
+            .boxes
+            .iter()
+            .find(|(p, c)| p.translation.y > 0.0 && (c.half_extents.x - 0.01).abs() < 1e-6)
+            .expect("the left pad");
+        let corner = pad.translation + Vector::splat(0.015 / 3f32.sqrt());
+        let cube = Cuboid::new(Vector::splat(0.002));
+        let pose = Pose::from_translation(corner);
+        assert!(at.intersects(&Pose::IDENTITY, &cube, &pose));
+        assert!(!gripper.shapes_meet(opening, &Pose::IDENTITY, &cube, &pose));
+        // At the pad's centre, both meet it.
+        let pose = Pose::from_translation(pad.translation);
+        assert!(gripper.shapes_meet(opening, &Pose::IDENTITY, &cube, &pose));
     }
 
     #[test]
