@@ -180,3 +180,23 @@ fn groups_of_joints_and_links_and_an_inferred_arm_are_read_as_moveit_reads_them(
     );
     assert!(gripper.chain.is_none());
 }
+
+/// MoveIt's Baxter SRDF marks its virtual joint passive: read, as MoveIt reads it; a passive
+/// joint that is neither a joint nor a virtual joint is an error with its position.
+#[test]
+fn a_passive_joint_may_name_the_virtual_joint() {
+    let srdf = "<robot name=\"pr2\">\n\
+         <virtual_joint name=\"world_joint\" type=\"planar\" parent_frame=\"odom\" child_link=\"base_link\"/>\n\
+         <passive_joint name=\"world_joint\"/>\n\
+         </robot>";
+    let pr2 = pr2_alone().with_srdf_str(srdf, "passive.srdf").unwrap();
+    assert_eq!(pr2.semantics().passive_joints, ["world_joint"]);
+    let e = error(&srdf.replace(
+        "<passive_joint name=\"world_joint\"",
+        "<passive_joint name=\"world\"",
+    ));
+    assert!(
+        e.contains("test.srdf:3:") && e.contains("unknown joint `world`"),
+        "{e}"
+    );
+}

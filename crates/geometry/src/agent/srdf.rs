@@ -15,7 +15,7 @@
 //! * `<virtual_joint name=".." type="planar|floating|fixed" parent_frame=".." child_link=".."/>`:
 //!   how the root link is placed in the world (the scene places it: htngtp's base is planar);
 //!   groups may name the virtual joint among their joints. `<passive_joint name=".."/>`: a
-//!   joint no controller drives (recorded).
+//!   joint no controller drives, or a virtual joint (recorded).
 //! * `<end_effector name=".." parent_link=".." group=".." parent_group=".."/>`: the hand or
 //!   gripper of the arm `parent_group` (without one, as MoveIt does: the group whose chain ends
 //!   at `parent_link`, else the one with the fewest joints whose chain holds it and none of the
@@ -163,15 +163,13 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
                 s.groups.push(group(&src, e, model, &s.virtual_joints)?);
                 // MoveIt's setup assistant may write a passive joint inside a group.
                 for c in e.children.iter().filter(|c| c.name == "passive_joint") {
-                    let (name, at) = src.attr(c, "name")?;
-                    known_joint(&src, model, name, at)?;
-                    s.passive_joints.push(name.to_string());
+                    s.passive_joints
+                        .push(passive_joint(&src, c, model, &s.virtual_joints)?);
                 }
             }
             "passive_joint" => {
-                let (name, at) = src.attr(e, "name")?;
-                known_joint(&src, model, name, at)?;
-                s.passive_joints.push(name.to_string());
+                s.passive_joints
+                    .push(passive_joint(&src, e, model, &s.virtual_joints)?);
             }
             "end_effector" => s.end_effectors.push(end_effector(&src, e, model)?),
             "group_state" => s.group_states.push(group_state(&src, e, model)?),
@@ -254,6 +252,21 @@ fn known_link(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<(
             format!("unknown link `{name}` (not in {})", model.source_name()),
         )
     })
+}
+
+/// A `<passive_joint>`'s name: a joint of the model, or a virtual joint (MoveIt's Baxter marks
+/// its planar `world_joint` passive).
+fn passive_joint(
+    src: &Source,
+    e: &Element,
+    model: &AgentModel,
+    virtual_joints: &[(String, String, String)],
+) -> Result<String, ModelError> {
+    let (name, at) = src.attr(e, "name")?;
+    if !virtual_joints.iter().any(|(v, _, _)| v == name) {
+        known_joint(src, model, name, at)?;
+    }
+    Ok(name.to_string())
 }
 
 fn known_joint(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<usize, ModelError> {
