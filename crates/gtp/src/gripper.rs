@@ -4,8 +4,10 @@
 //!
 //! The boxes come from the robot's own model ([`GripperModel::of_arm`]): the collision shapes of
 //! the links of the arm's SRDF end effector (the links of its group's joints and the link they
-//! hang from: the palm and the fingers), placed in the tool frame by the URDF's joints with the fingers where a jaw opening puts them (each finger's
-//! joint at half the opening, as [`crate::robot::set_opening`] drives it). A box shape is its own
+//! hang from: the palm and the fingers), placed in the tool frame by the URDF's joints with the
+//! fingers where a jaw opening puts them (the finger joint at the value whose gap between the
+//! pads, measured over the joint's range, is the opening, as [`crate::robot::set_opening`]
+//! drives it; half the opening for sliding fingers whose pads meet closed). A box shape is its own
 //! box; any other shape (a mesh's convex pieces) is boxed by its bounding box in the tool frame
 //! where the opening puts it, which only widens the pre-check, and stays tight as a turning
 //! finger swings (the bounding box of the finger's own frame, turned with it, would reach across
@@ -18,7 +20,7 @@ use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, Mutex};
 
-use geometry::agent::{AgentModel, Joint};
+use geometry::agent::{AgentModel, Joint, JointKind};
 use geometry::collision::HullBounds;
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
@@ -30,6 +32,10 @@ use parry3d::shape::{Cuboid, Shape, SharedShape};
 /// domains/library/scene-fetch.toml pick pos-machine` finds no grasp). A gripper that opens
 /// less is used to its own limit.
 pub const OPENING_CAP: f32 = 0.09;
+
+/// The widest gap (metres) between a sliding finger's pads at its closed end for which its
+/// value is taken as half the opening; pads farther apart (Baxter's, 1.8 cm) are measured.
+const SLIDING_PADS_MEET: f32 = 0.002;
 
 /// A gripper's boxes (pose in the tool frame, half extents) per jaw opening (its bits).
 type BoxesByOpening = HashMap<u32, Vec<(Pose, Cuboid)>>;
@@ -81,10 +87,11 @@ pub struct GripperModel {
     pub max_opening: f32,
     /// The finger joint's limits as an opening, to clamp openings to.
     opening_range: (f32, f32),
-    /// For a finger joint that turns (a revolute joint, as the PR2's): (jaw gap, joint value)
-    /// pairs from the narrowest gap to the widest, measured between the fingers' boxes over the
-    /// joint's range (from its lower limit or from its upper, whichever closes the jaws); empty
-    /// for a sliding finger, whose value is half the opening.
+    /// (jaw gap, finger joint value) pairs from the narrowest gap to the widest, measured
+    /// between the fingers' boxes over the joint's range (from its lower limit or from its
+    /// upper, whichever closes the jaws), for a turning finger (the PR2's) and for a sliding one
+    /// whose pads stand apart closed (Baxter's, 1.8 cm); empty for other sliding fingers and
+    /// without fingers on both sides of the jaws: the joint's value is then half the opening.
     turns: Vec<(f32, f32)>,
     /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
     /// by it).
@@ -131,10 +138,9 @@ impl GripperModel {
             key: 0,
             by_opening: None,
         };
-        if let Some(k) = dof
-            && model.joints()[model.dof_joint(k)].kind != geometry::agent::JointKind::Prismatic
-        {
-            gripper.measure_turns(model.dof_limits()[k]);
+        if let Some(k) = dof {
+            let sliding = model.joints()[model.dof_joint(k)].kind == JointKind::Prismatic;
+            gripper.measure_turns(model.dof_limits()[k], sliding);
         }
         gripper.key = gripper.dimensions_key();
         if gripper
@@ -180,8 +186,8 @@ impl GripperModel {
         Gripper { boxes, opening }
     }
 
-    /// The finger joint's value for a jaw opening: half of it for a sliding finger; for a
-    /// turning one, the value whose measured gap is the opening (interpolated).
+    /// The finger joint's value for a jaw opening: the value whose measured gap is the opening
+    /// (interpolated); half the opening where the gap was not measured.
     pub fn joint_value(&self, opening: f32) -> f32 {
         let Some(&(first_gap, first)) = self.turns.first() else {
             return opening / 2.0;
@@ -204,8 +210,8 @@ impl GripperModel {
     }
 
     /// The jaw opening of finger joint value `value`: the inverse of
-    /// [`GripperModel::joint_value`] (twice the value for a sliding finger; for a turning one,
-    /// the measured gap at the value, interpolated), within the opening range.
+    /// [`GripperModel::joint_value`] (the measured gap at the value, interpolated; twice the
+    /// value where the gap was not measured), within the opening range.
     pub fn opening_at(&self, value: f32) -> f32 {
         let (lo, hi) = self.opening_range;
         if self.turns.is_empty() {
@@ -260,11 +266,11 @@ impl GripperModel {
         boxes
     }
 
-    /// Measures a turning finger joint's jaw gap over its range (`turns`), and sets the
-    /// opening range and the widest opening from it. The gap is along the tool frame's y (the
-    /// closing axis) between the inner faces of the boxes that move with the joint, those on
-    /// +y against those on -y; without boxes on both sides the joint is taken as sliding.
-    fn measure_turns(&mut self, limits: geometry::agent::JointLimits) {
+    /// Measures the finger joint's jaw gap over its range (`turns`), and sets the opening range
+    /// and the widest opening from it. The gap is along the tool frame's y (the closing axis)
+    /// between the inner faces of the boxes that move with the joint, those on +y against those
+    /// on -y; without boxes on both sides the joint's value is taken as half the opening.
+    fn measure_turns(&mut self, limits: geometry::agent::JointLimits, sliding: bool) {
         const STEPS: usize = 64;
         let mut measured: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
         for i in 0..=STEPS {
@@ -285,6 +291,15 @@ impl GripperModel {
             if turns.last().is_none_or(|&(g, _)| gap > g) {
                 turns.push((gap, value));
             }
+        }
+        // Sliding fingers whose pads meet closed keep their joint's convention (the value is
+        // half the opening; the shipped models leave a millimetre between their pads).
+        if sliding
+            && turns
+                .first()
+                .is_some_and(|&(closed, _)| closed <= SLIDING_PADS_MEET)
+        {
+            return;
         }
         if let (Some(&(lo, _)), Some(&(hi, _))) = (turns.first(), turns.last()) {
             self.opening_range = (lo.max(0.0), hi.max(0.0));
@@ -396,17 +411,22 @@ fn common_root(model: &AgentModel, links: &[usize], tool_link: usize) -> usize {
 
 /// The finger joints of arm `arm`'s end effector: the gripper's joint, the first of its group
 /// that mimics none (none for a person's hand), and the others that mimic none with its kind
-/// and limits, which move with it (fingers each on a joint of its own, as the Fetch's).
+/// and limits, which move with it (fingers each on a joint of its own, as the Fetch's). A group
+/// without movable joints (MoveIt's Baxter hands, chains of fixed joints that leave the fingers
+/// out) gives the movable joints that hang below its links instead.
 pub fn finger_dofs(model: &AgentModel, arm: &str) -> (Option<usize>, Vec<usize>) {
     let sem = model.semantics();
     let Some(g) = sem.end_effector(arm).and_then(|e| sem.group(&e.group)) else {
         return (None, Vec::new());
     };
-    let dofs: Vec<usize> = g
+    let mut dofs: Vec<usize> = g
         .joints
         .iter()
         .filter_map(|j| model.dof_index(j).ok())
         .collect();
+    if dofs.is_empty() {
+        dofs = dofs_below(model, g);
+    }
     let Some(&first) = dofs.first() else {
         return (None, Vec::new());
     };
@@ -418,6 +438,39 @@ pub fn finger_dofs(model: &AgentModel, arm: &str) -> (Option<usize>, Vec<usize>)
         .filter(|&k| k != first && kind(k) == kind(first) && limits[k] == limits[first])
         .collect();
     (Some(first), followers)
+}
+
+/// The degrees of freedom of the joints below group `g`'s links (its links, its joints' child
+/// links, its chain's links), in the model's joint order.
+fn dofs_below(model: &AgentModel, g: &geometry::agent::srdf::Group) -> Vec<usize> {
+    let joints = model.joints();
+    let mut tops: Vec<usize> = g
+        .links
+        .iter()
+        .filter_map(|n| model.link_id(n).ok())
+        .collect();
+    tops.extend(
+        g.joints
+            .iter()
+            .filter_map(|n| model.joint_id(n))
+            .map(|j| joints[j].child),
+    );
+    if let Some(chain) = g
+        .chain
+        .as_ref()
+        .and_then(|(b, t)| model.chain_between(b, t).ok())
+    {
+        tops.push(chain.root_link);
+        tops.extend(chain.joints.iter().map(|&j| joints[j].child));
+    }
+    joints
+        .iter()
+        .filter(|j| {
+            tops.iter()
+                .any(|&t| j.child != t && model.is_descendant(j.child, t))
+        })
+        .filter_map(|j| j.dof)
+        .collect()
 }
 
 /// The joints from `root` down to `link`, each with how the opening sets its value (the
@@ -746,6 +799,43 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn sliding_fingers_whose_pads_stand_apart_closed_are_measured() {
+        // Baxter-like: each finger slides out along y from pads whose inner faces stand 9 mm
+        // off the centre line closed (an 18 mm gap), the second finger mimicking the first.
+        let finger = |side: &str, sign: f32, mimic: &str| {
+            format!(
+                r#"<link name="{side}"><collision><origin xyz="0.08 {y} 0"/><geometry><box size="0.02 0.01 0.02"/></geometry></collision></link>
+                <joint name="{side}_joint" type="prismatic"><parent link="palm"/><child link="{side}"/>
+                  <axis xyz="0 {sign} 0"/><limit lower="0" upper="0.02" effort="1" velocity="1"/>{mimic}</joint>"#,
+                y = sign * 0.014
+            )
+        };
+        let urdf = format!(
+            r#"<robot name="sliding"><link name="base"/><link name="palm"/>
+            <joint name="wrist" type="revolute"><parent link="base"/><child link="palm"/><axis xyz="1 0 0"/>
+              <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+            <link name="tool"/><joint name="tool_joint" type="fixed"><parent link="palm"/><child link="tool"/><origin xyz="0.08 0 0"/></joint>
+            {}{}</robot>"#,
+            finger("l", 1.0, ""),
+            finger("r", -1.0, r#"<mimic joint="l_joint"/>"#)
+        );
+        let srdf = r#"<robot name="sliding"><group name="arm"><chain base_link="base" tip_link="tool"/></group>
+            <group name="hand"><joint name="l_joint"/><joint name="r_joint"/></group>
+            <end_effector name="ee" parent_link="tool" group="hand" parent_group="arm"/></robot>"#;
+        let model = AgentModel::from_urdf_str(&urdf, "sliding.urdf")
+            .and_then(|m| m.with_srdf_str(srdf, "sliding.srdf"))
+            .expect("test model");
+        let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
+        let (lo, hi) = gripper.opening_range;
+        assert!(
+            (lo - 0.018).abs() < 1e-4 && (hi - 0.058).abs() < 1e-4,
+            "{lo} {hi}"
+        );
+        assert!((gripper.joint_value(0.03) - 0.006).abs() < 1e-4);
+        assert!((gripper.opening_at(0.006) - 0.03).abs() < 1e-4);
+    }
+
+    #[test]
     fn the_gripper_shapes_meet_less_than_their_boxes() {
         // Ball pads (1 cm radius): a 4 mm cube off a pad's centre along the diagonal, 1.5 cm
         // away (its nearest corner 1.15 cm), sits in the corner of the ball's box but misses
@@ -806,5 +896,6 @@ pub(crate) mod tests {
     fn a_sliding_finger_takes_half_the_opening() {
         let gripper = pr2_gripper();
         assert_eq!(gripper.joint_value(0.06), 0.03);
+        assert_eq!(gripper.opening_at(0.03), 0.06);
     }
 }
