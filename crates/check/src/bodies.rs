@@ -214,7 +214,8 @@ pub fn hand_of(agent: &Agent, link_poses: &[Pose], held: &Pose) -> Option<(usize
 /// 1. their shapes are within 1 cm of each other in the initial posture (`link_poses`), or
 /// 2. one link's origin stays at a fixed point of the other's frame (within 1 mm) in every
 ///    posture the plan shows: they are joined by a joint (parent and child, possibly through
-///    shapeless links), so they may touch as it turns.
+///    shapeless links), so they may touch as it turns, or
+/// 3. the robot's description says so (`disabled_collisions`, its SRDF's pairs).
 pub struct Adjacency {
     n: usize,
     allowed: Vec<bool>,
@@ -238,6 +239,10 @@ impl Adjacency {
                 adj.allowed[i * n + j] = ok;
                 adj.allowed[j * n + i] = ok;
             }
+        }
+        for &(i, j) in &agent.disabled {
+            adj.allowed[i * n + j] = true;
+            adj.allowed[j * n + i] = true;
         }
         adj
     }

@@ -58,6 +58,9 @@ pub struct Agent {
     pub shoulders: Vec<usize>,
     /// Its `hands` (none declared: no link may grasp).
     pub hands: Vec<Hand>,
+    /// Link pairs its robot description says may touch (`disabled_collisions`, from the SRDF):
+    /// left out of the self-collision check.
+    pub disabled: Vec<(usize, usize)>,
     pub links: Vec<Link>,
     pub link_poses: Vec<Pose>,
     /// The agent's kinematics, read from the `urdf` text when the file carries it.

@@ -276,6 +276,7 @@ fn agent(n: Node) -> Res<Agent> {
         head_pivot: None,
         shoulders: Vec::new(),
         hands: Vec::new(),
+        disabled: Vec::new(),
         links,
         link_poses: Vec::new(),
         kinematics: None,
@@ -308,6 +309,17 @@ fn agent(n: Node) -> Res<Agent> {
                     tool: h.get("tool_link", |n| link_index(n, &a))?,
                     links: h.get("links", |n| n.array(|n| link_index(n, &a)))?,
                 })
+            })
+        })?
+        .unwrap_or_default();
+    a.disabled = n
+        .opt("disabled_collisions", |n| {
+            n.array(|pair| {
+                let names = pair.array(|n| link_index(n, &a))?;
+                match names[..] {
+                    [i, j] => Ok((i, j)),
+                    _ => Err(InputError::bad(pair.path, "expected two link names")),
+                }
             })
         })?
         .unwrap_or_default();

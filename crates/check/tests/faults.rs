@@ -253,6 +253,20 @@ fn self_collision_of_non_adjacent_links() {
     );
     // the boxes overlap 0.04 m in y (0.06 in x and z)
     assert!((f.depth_mm - 40.0).abs() < 0.5, "{}", f.depth_mm);
+    // A pair the robot's SRDF says may touch (`disabled_collisions`) is left out; another
+    // named there does not hide it.
+    let mut disabled = plan.clone();
+    disabled["scene"]["agents"][0]["disabled_collisions"] =
+        json!([["l_gripper_palm_link", "r_gripper_palm_link"]]);
+    assert!(check(&disabled).faults.is_empty());
+    disabled["scene"]["agents"][0]["disabled_collisions"] =
+        json!([["l_gripper_palm_link", "r_gripper_l_finger_link"]]);
+    assert_eq!(only(&check(&disabled)).kind, FaultKind::SelfCollision);
+    disabled["scene"]["agents"][0]["disabled_collisions"] = json!([["l_gripper_palm_link"]]);
+    let e = check::parse_plan(&disabled.to_string(), "test.json")
+        .err()
+        .expect("an error");
+    assert!(e.to_string().contains("expected two link names"), "{e}");
 }
 
 /// The palm and finger in the right hand move from `y0` to `y1` (finger's y).

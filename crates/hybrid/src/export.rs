@@ -150,6 +150,9 @@ pub fn scene_json(world: &World) -> Value {
                 "head_pivot_link": a.head_pivot_link().map(name),
                 "shoulder_links": a.shoulder_links.iter().map(|&l| name(l)).collect::<Vec<_>>(),
                 "hands": hands,
+                // The link pairs the robot's SRDF says may touch (`<disable_collisions>`): left
+                // out of the self-collision checks, as MoveIt leaves them out.
+                "disabled_collisions": model.semantics().disabled_collisions,
                 "links": links,
                 "link_poses": link_poses_json(world, id, world.agent_state(id).link_poses()),
                 "urdf": model.urdf(),
