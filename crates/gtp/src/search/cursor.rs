@@ -195,20 +195,25 @@ impl Search {
             return Some(Failure::at(Stage::Pick, message));
         }
         if self.choices.is_empty() {
-            return Some(Failure::at(
-                Stage::Grasp,
+            let widest = self.setup.arms.iter().map(|a| a.gripper.max_opening);
+            let widest = widest.fold(0.0f32, f32::max);
+            let message = if widest > 0.0 {
                 format!(
                     "`{}` has no grasp for the gripper (too wide for a {:.0} mm jaw opening, \
                      or every grasp collides with the object)",
                     self.object_name(),
-                    self.setup
-                        .arms
-                        .iter()
-                        .map(|a| a.gripper.max_opening)
-                        .fold(0.0f32, f32::max)
-                        * 1000.0
-                ),
-            ));
+                    widest * 1000.0
+                )
+            } else {
+                format!(
+                    "`{}` has no grasp: no arm's gripper opens its jaws (no finger joint in or \
+                     below its SRDF end effector group, or its fingers do not face each other \
+                     across the tool frame's y axis: the scene's `hands` tool frame has x \
+                     forward out of the palm, y along which the fingers close)",
+                    self.object_name()
+                )
+            };
+            return Some(Failure::at(Stage::Grasp, message));
         }
         None
     }
