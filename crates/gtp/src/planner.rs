@@ -43,7 +43,7 @@ use crate::task::{Constraints, TaskKind};
 pub enum GtpError {
     /// The task name is not one of the known tasks.
     #[error(
-        "unknown task `{0}` (known: pick, place-on, show, give, make-accessible, put-away, navigate-to, pick-and-make-accessible)"
+        "unknown task `{0}` (known: pick, place-on, show, give, take, make-accessible, put-away, navigate-to, pick-and-make-accessible, pick-and-show, pick-and-give, pick-and-put-away, pick-and-place-on)"
     )]
     UnknownTask(String),
     /// Wrong number of arguments.

@@ -73,11 +73,21 @@ impl TaskKind {
         }
     }
 
-    /// Parses a task name; accepts `_` for `-`, any case, and the paper's short forms
-    /// (`makeacc`, `putaway`, `hide`, `navto`, `puton`).
+    /// Parses a task name; accepts `_` for `-`, any case, the paper's short forms (`makeacc`,
+    /// `putaway`, `hide`, `navto`, `puton`) and its compound tasks, PICK grouped with the task
+    /// after it (`pick-and-show`, `pick-and-give`, `pick-and-put-away`, `pick-and-place-on`):
+    /// the placing and handing-over tasks grasp the object themselves when it is not held yet,
+    /// choosing the grasp with the placement in view, which is what the compound task asks.
     pub fn from_name(name: &str) -> Option<TaskKind> {
         let n = name.to_ascii_lowercase().replace('_', "-");
-        Some(match n.as_str() {
+        let n = match n.as_str() {
+            "pick-and-show" => "show",
+            "pick-and-give" => "give",
+            "pick-and-put-away" => "put-away",
+            "pick-and-place-on" | "pick-and-put-on" => "place-on",
+            other => other,
+        };
+        Some(match n {
             "pick" => TaskKind::Pick,
             "place-on" | "placeon" | "put-on" | "puton" | "place" => TaskKind::PlaceOn,
             "show" => TaskKind::Show,
@@ -287,6 +297,15 @@ mod tests {
         );
         assert_eq!(TaskKind::from_name("hide"), Some(TaskKind::PutAway));
         assert_eq!(TaskKind::from_name("fly"), None);
+        // The paper's compound tasks, as domains and the command line write them.
+        for (name, kind) in [
+            ("pick-and-show", TaskKind::Show),
+            ("pick_and_give", TaskKind::Give),
+            ("pick-and-put-away", TaskKind::PutAway),
+            ("pick-and-place-on", TaskKind::PlaceOn),
+        ] {
+            assert_eq!(TaskKind::from_name(name), Some(kind), "{name}");
+        }
     }
 
     #[test]

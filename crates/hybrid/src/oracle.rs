@@ -298,6 +298,9 @@ impl GtpOracle {
     }
 
     fn call_options(&self, task: &str, args: &[String]) -> CallOptions {
+        // Seeded by the task the GTP runs: a compound task of the paper (`pick-and-put-away`)
+        // and the task that answers it (`put-away`) are the same call.
+        let task = gtp::task::TaskKind::from_name(task).map_or(task, |k| k.name());
         let mut h = std::collections::hash_map::DefaultHasher::new();
         (task, args, self.stack[self.stack.len() - 1].fingerprint).hash(&mut h);
         CallOptions {
@@ -327,7 +330,7 @@ impl GtpOracle {
             return Ok(s);
         }
         let world = self.world().clone();
-        let mut s = self.run(&world, gtp_task(&request.task), &request.args)?;
+        let mut s = self.run(&world, &request.task, &request.args)?;
         for _ in 0..self.memo.given(request) {
             s.next();
         }
@@ -461,19 +464,6 @@ impl GtpOracle {
     }
 }
 
-/// The GTP task that answers a compound task of the paper (PICK grouped with the GTP task after
-/// it). The GTP's placing and handing-over tasks grasp the object themselves when it is not yet
-/// held, choosing the grasp with the placement in view, which is what the compound task asks.
-fn gtp_task(task: &str) -> &str {
-    match task {
-        "pick-and-show" => "show",
-        "pick-and-give" => "give",
-        "pick-and-put-away" => "put-away",
-        "pick-and-place-on" | "pick-and-put-on" => "place-on",
-        other => other,
-    }
-}
-
 impl GeometricOracle for GtpOracle {
     fn initial_facts(&mut self) -> Result<Vec<GroundAtom>, OracleError> {
         Ok(self.initial_literals())
@@ -487,7 +477,7 @@ impl GeometricOracle for GtpOracle {
         };
         if !self.memo.contains(&request) {
             let world = self.world().clone();
-            let gtp = self.run(&world, gtp_task(task), args)?;
+            let gtp = self.run(&world, task, args)?;
             self.memo.park(&request, gtp);
         }
         let id = self.next_stream;
