@@ -798,10 +798,10 @@ pub(crate) mod tests {
         }
     }
 
-    #[test]
-    fn sliding_fingers_whose_pads_stand_apart_closed_are_measured() {
-        // Baxter-like: each finger slides out along y from pads whose inner faces stand 9 mm
-        // off the centre line closed (an 18 mm gap), the second finger mimicking the first.
+    /// Baxter-like: each finger slides out along y from pads whose inner faces stand 9 mm off
+    /// the centre line closed (an 18 mm gap), the second finger mimicking the first; the
+    /// SRDF's hand group is `hand` (its end effector's).
+    fn sliding_finger_model(hand: &str) -> AgentModel {
         let finger = |side: &str, sign: f32, mimic: &str| {
             format!(
                 r#"<link name="{side}"><collision><origin xyz="0.08 {y} 0"/><geometry><box size="0.02 0.01 0.02"/></geometry></collision></link>
@@ -811,7 +811,8 @@ pub(crate) mod tests {
             )
         };
         let urdf = format!(
-            r#"<robot name="sliding"><link name="base"/><link name="palm"/>
+            r#"<robot name="sliding"><link name="base"/>
+            <link name="palm"><collision><geometry><box size="0.02 0.06 0.02"/></geometry></collision></link>
             <joint name="wrist" type="revolute"><parent link="base"/><child link="palm"/><axis xyz="1 0 0"/>
               <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
             <link name="tool"/><joint name="tool_joint" type="fixed"><parent link="palm"/><child link="tool"/><origin xyz="0.08 0 0"/></joint>
@@ -819,12 +820,19 @@ pub(crate) mod tests {
             finger("l", 1.0, ""),
             finger("r", -1.0, r#"<mimic joint="l_joint"/>"#)
         );
-        let srdf = r#"<robot name="sliding"><group name="arm"><chain base_link="base" tip_link="tool"/></group>
-            <group name="hand"><joint name="l_joint"/><joint name="r_joint"/></group>
-            <end_effector name="ee" parent_link="tool" group="hand" parent_group="arm"/></robot>"#;
-        let model = AgentModel::from_urdf_str(&urdf, "sliding.urdf")
-            .and_then(|m| m.with_srdf_str(srdf, "sliding.srdf"))
-            .expect("test model");
+        let srdf = format!(
+            r#"<robot name="sliding"><group name="arm"><chain base_link="base" tip_link="tool"/></group>
+            <group name="hand">{hand}</group>
+            <end_effector name="ee" parent_link="tool" group="hand" parent_group="arm"/></robot>"#
+        );
+        AgentModel::from_urdf_str(&urdf, "sliding.urdf")
+            .and_then(|m| m.with_srdf_str(&srdf, "sliding.srdf"))
+            .expect("test model")
+    }
+
+    #[test]
+    fn sliding_fingers_whose_pads_stand_apart_closed_are_measured() {
+        let model = sliding_finger_model(r#"<joint name="l_joint"/><joint name="r_joint"/>"#);
         let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
         let (lo, hi) = gripper.opening_range;
         assert!(
@@ -833,6 +841,16 @@ pub(crate) mod tests {
         );
         assert!((gripper.joint_value(0.03) - 0.006).abs() < 1e-4);
         assert!((gripper.opening_at(0.006) - 0.03).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_hand_group_of_fixed_joints_finds_the_fingers_below_it() {
+        // MoveIt's Baxter: the hand group a chain of fixed joints, the fingers left out.
+        let model = sliding_finger_model(r#"<chain base_link="palm" tip_link="tool"/>"#);
+        let (dof, _) = finger_dofs(&model, "arm");
+        assert_eq!(dof, model.dof_index("l_joint").ok());
+        let gripper = GripperModel::of_named_arm(&model, "arm").expect("arm");
+        assert!((gripper.model_opening() - 0.058).abs() < 1e-4);
     }
 
     #[test]
