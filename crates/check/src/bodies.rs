@@ -254,7 +254,7 @@ impl Adjacency {
 }
 
 /// The initial posture and every frame of agent `a`.
-fn postures(plan: &Plan, a: usize) -> Vec<&[Pose]> {
+pub fn postures(plan: &Plan, a: usize) -> Vec<&[Pose]> {
     let mut out: Vec<&[Pose]> = vec![&plan.agents[a].link_poses];
     for s in &plan.steps {
         for t in s.trajectories.iter().filter(|t| t.agent == a) {
@@ -275,7 +275,8 @@ fn touch_initially(agent: &Agent, i: usize, j: usize) -> bool {
     })
 }
 
-fn within(a: &Placed, b: &Placed, gap: f32) -> bool {
+/// Whether `a` and `b` are within `gap` (metres) of each other.
+pub fn within(a: &Placed, b: &Placed, gap: f32) -> bool {
     if !a.aabb.loosened(gap).intersects(&b.aabb) {
         return false;
     }

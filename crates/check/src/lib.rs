@@ -46,6 +46,7 @@
 
 mod bodies;
 pub mod error;
+mod grip;
 pub mod kinematics;
 mod literals;
 pub mod model;

@@ -4,6 +4,7 @@ use std::collections::BTreeSet;
 
 use crate::Options;
 use crate::bodies::Adjacency;
+use crate::grip::check_grip;
 use crate::literals::{check_literals, check_persisting};
 use crate::model::{Literal, Plan, Step, Trajectory};
 use crate::motion::Controllers;
@@ -142,6 +143,11 @@ fn run_trajectory(
     }
     if let Some(end) = last {
         world.agents[a] = end;
+    }
+    if let Some(o) = traj.holding {
+        report
+            .faults
+            .extend(check_grip(plan, (step, k), traj, o, world));
     }
 }
 

@@ -914,3 +914,50 @@ fn a_head_turns_only_as_far_as_its_joints_allow() {
     assert_eq!(stale(&limited), vec!["(visible book bot)".to_string()]);
     assert!(limited.faults[0].detail.contains("0.00 with it turned"));
 }
+
+/// A robot hand's fingers must grip what it carries: at the end of a trajectory that holds
+/// the book and declares its gripper, a finger (a hand link that moves relative to the tool
+/// frame) within 3 mm of the book, else a `loose-grip` fault.
+#[test]
+fn a_finger_must_grip_what_the_hand_carries() {
+    let lift = |finger_beside_book: bool| {
+        let mut plan = scene();
+        let frames = [0.77, 0.82]
+            .iter()
+            .map(|&z| {
+                let mut moved = vec![("r_gripper_palm_link", [1.0, -0.2, z + 0.045])];
+                if finger_beside_book {
+                    // The book's -y face at -0.27; the finger's half width 5 mm: 1 mm apart.
+                    moved.push(("r_gripper_l_finger_link", [1.0, -0.276, z]));
+                }
+                posture(BOT, &moved)
+            })
+            .collect();
+        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+        let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
+        let mut jt = joint_trajectory();
+        jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
+        traj["joint_trajectory"] = jt;
+        push_step(
+            &mut plan,
+            "pick",
+            "book",
+            vec![traj],
+            json!([]),
+            json!([]),
+            json!({ "book": at(1.0, -0.2, 0.82) }),
+        );
+        check(&plan)
+    };
+    let r = lift(true);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    let r = lift(false);
+    assert_eq!(
+        kinds(&r),
+        vec![(
+            FaultKind::LooseGrip,
+            "bot/r_gripper_palm_link".to_string(),
+            "held book".to_string()
+        )]
+    );
+}

@@ -18,7 +18,8 @@ use crate::exit;
     person), reporting only clear disagreements; and, where a trajectory has a \
     `joint_trajectory`, its timing: times strictly increasing from 0, at rest at both ends, \
     velocities and accelerations within the limits it declares, its ends at its first and \
-    last waypoints (`timing` faults).\n\nExit codes: 0 clean, 1 faults found, \
+    last waypoints (`timing` faults); and, where it also declares its gripper, that a finger \
+    of the holding hand is within 3 mm of what it carries at its end (`loose-grip`).\n\nExit codes: 0 clean, 1 faults found, \
     3 bad input (unreadable file, bad JSON with line and column, missing key with its path)."
 )]
 pub struct Args {
