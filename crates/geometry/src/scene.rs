@@ -202,6 +202,39 @@ struct FrameSpec {
     rpy: [f32; 3],
 }
 
+/// A scene's `posture`: one `group_state` name, or a list of them.
+#[derive(Debug)]
+enum Postures {
+    One(String),
+    Many(Vec<String>),
+}
+
+impl<'de> Deserialize<'de> for Postures {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Names;
+        impl<'de> serde::de::Visitor<'de> for Names {
+            type Value = Postures;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a posture name (a `group_state` of the SRDF) or a list of names")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Postures, E> {
+                Ok(Postures::One(v.to_string()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Postures, A::Error> {
+                let mut names = Vec::new();
+                while let Some(name) = seq.next_element::<String>()? {
+                    names.push(name);
+                }
+                Ok(Postures::Many(names))
+            }
+        }
+        d.deserialize_any(Names)
+    }
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 struct AgentSpec {
@@ -212,8 +245,9 @@ struct AgentSpec {
     srdf: Option<String>,
     #[serde(default)]
     base: BaseSpec,
-    /// A named posture of the SRDF (`group_state`), applied before `joints`.
-    posture: Option<String>,
+    /// Named postures of the SRDF (`group_state`s, one or a list: MoveIt names one per
+    /// group), applied in order before `joints`.
+    posture: Option<Postures>,
     /// Joint values by URDF joint name (radians, metres for prismatic joints).
     #[serde(default)]
     joints: BTreeMap<String, f32>,
@@ -357,8 +391,8 @@ pub struct AgentSpecResolved {
     pub mount_height: f32,
     /// Fixed frames added to the URDF (see [`crate::agent::frames`]).
     pub frames: Vec<crate::agent::ExtraFrame>,
-    /// The SRDF posture (`group_state` name) the agent starts in, before `joints`.
-    pub posture: Option<String>,
+    /// The SRDF postures (`group_state` names) the agent starts in, in order, before `joints`.
+    pub postures: Vec<String>,
     /// Joint values by name, as written.
     pub joints: Vec<(String, f32)>,
     /// Link whose frame is the eye / camera (x forward, z up).
@@ -714,7 +748,11 @@ fn agent_spec(
         base: [a.base.x, a.base.y, a.base.yaw.to_radians()],
         mount_height: a.base.z,
         frames: extra_frames(ck, a, at)?,
-        posture: a.posture.clone(),
+        postures: match &a.posture {
+            None => Vec::new(),
+            Some(Postures::One(name)) => vec![name.clone()],
+            Some(Postures::Many(names)) => names.clone(),
+        },
         joints: a.joints.iter().map(|(k, v)| (k.clone(), *v)).collect(),
         eye: a.eye.clone(),
         shoulders: a.shoulders.clone(),

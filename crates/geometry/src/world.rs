@@ -301,7 +301,7 @@ impl World {
                 }
             }
             let mut q = model.default_configuration().into_vec();
-            if let Some(name) = &spec.posture {
+            for name in &spec.postures {
                 let values = model.posture(name);
                 if values.is_empty() {
                     return Err(scene.error(

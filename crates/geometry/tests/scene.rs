@@ -229,3 +229,24 @@ fn object_count_is_capped_and_overlaps_among_many_are_found() {
     let e = e.to_string();
     assert!(e.contains("`o9999` starts inside `o9998`"), "{e}");
 }
+
+/// `posture` names one `group_state` or a list of them (MoveIt names one per group: a
+/// two-armed robot's postures are two), applied in order before `joints`.
+#[test]
+fn a_posture_may_be_a_list_of_group_states() {
+    let urdf = root().join("models/fetch.urdf");
+    let scene = |posture: &str| {
+        let text = format!(
+            "[[agents]]\nname = \"fetch\"\nkind = \"robot\"\nurdf = {:?}\nposture = {posture}\n",
+            urdf.display().to_string()
+        );
+        let scene = Scene::from_str(&text, "posture.toml", &root(), "posture").unwrap();
+        World::from_scene(scene).unwrap()
+    };
+    let one = scene("\"tucked\"");
+    let list = scene("[\"tucked\"]");
+    let fetch = one.agent_id("fetch").unwrap();
+    assert_eq!(one.agent_state(fetch).q, list.agent_state(fetch).q);
+    let none = scene("[]");
+    assert_ne!(one.agent_state(fetch).q, none.agent_state(fetch).q);
+}
