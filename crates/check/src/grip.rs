@@ -1,8 +1,8 @@
 //! Whether a robot's jaws hold what they carry: at the end of each trajectory that declares
-//! `holding` and its gripper (`joint_trajectory.gripper_joint`), a finger of the holding hand (a link of its `hands` entry that moves relative to
-//! the tool frame somewhere in the plan; any of its links where none does) lies within
-//! [`GRIP_GAP`] of the object. A gripper that never closes on its object, or opens while it
-//! carries it, leaves none there.
+//! `holding` and its gripper (`joint_trajectory.gripper_joint`), a finger of the holding hand
+//! (a link of its `hands` entry that moves relative to the tool frame somewhere in the plan;
+//! any of its links where none does) lies within [`GRIP_GAP`] of the object. A gripper that
+//! never closes on its object, or opens while it carries it, leaves none there.
 
 use parry3d::math::Pose;
 

@@ -31,8 +31,9 @@ pub enum FaultKind {
     Discontinuity,
     /// A frame's link poses are not the forward kinematics of the agent's URDF at its point.
     Kinematics,
-    /// At the end of a trajectory that holds an object, fewer than two links of the robot's
-    /// holding hand are within 3 mm of it: the jaws do not close on what they carry.
+    /// At the end of a robot's trajectory that holds an object and declares its gripper, no
+    /// finger of the holding hand is within 3 mm of it: the jaws do not close on what they
+    /// carry.
     LooseGrip,
 }
 

@@ -92,7 +92,7 @@ pub struct GripperModel {
     /// upper, whichever closes the jaws), for a turning finger (the PR2's) and for a sliding one
     /// whose pads stand apart closed (Baxter's, 1.8 cm); empty for other sliding fingers and
     /// without fingers on both sides of the jaws: the joint's value is then half the opening.
-    turns: Vec<(f32, f32)>,
+    gaps: Vec<(f32, f32)>,
     /// A key of the dimensions (what depends on the gripper's shape, as grasp sets, is cached
     /// by it).
     key: u64,
@@ -134,13 +134,13 @@ impl GripperModel {
             links: boxes,
             max_opening: range.1.min(OPENING_CAP),
             opening_range: range,
-            turns: Vec::new(),
+            gaps: Vec::new(),
             key: 0,
             by_opening: None,
         };
         if let Some(k) = dof {
             let sliding = model.joints()[model.dof_joint(k)].kind == JointKind::Prismatic;
-            gripper.measure_turns(model.dof_limits()[k], sliding);
+            gripper.measure_gaps(model.dof_limits()[k], sliding);
         }
         gripper.key = gripper.dimensions_key();
         if gripper
@@ -189,13 +189,13 @@ impl GripperModel {
     /// The finger joint's value for a jaw opening: the value whose measured gap is the opening
     /// (interpolated); half the opening where the gap was not measured.
     pub fn joint_value(&self, opening: f32) -> f32 {
-        let Some(&(first_gap, first)) = self.turns.first() else {
+        let Some(&(first_gap, first)) = self.gaps.first() else {
             return opening / 2.0;
         };
         if opening <= first_gap {
             return first;
         }
-        for w in self.turns.windows(2) {
+        for w in self.gaps.windows(2) {
             let ((g0, v0), (g1, v1)) = (w[0], w[1]);
             if opening <= g1 {
                 let t = if g1 > g0 {
@@ -206,7 +206,7 @@ impl GripperModel {
                 return v0 + t * (v1 - v0);
             }
         }
-        self.turns.last().map_or(first, |&(_, v)| v)
+        self.gaps.last().map_or(first, |&(_, v)| v)
     }
 
     /// The jaw opening of finger joint value `value`: the inverse of
@@ -214,10 +214,10 @@ impl GripperModel {
     /// value where the gap was not measured), within the opening range.
     pub fn opening_at(&self, value: f32) -> f32 {
         let (lo, hi) = self.opening_range;
-        if self.turns.is_empty() {
+        if self.gaps.is_empty() {
             return (2.0 * value).clamp(lo, hi);
         }
-        for w in self.turns.windows(2) {
+        for w in self.gaps.windows(2) {
             let ((g0, v0), (g1, v1)) = (w[0], w[1]);
             let (vmin, vmax) = (v0.min(v1), v0.max(v1));
             if (vmin..=vmax).contains(&value) && v1 != v0 {
@@ -225,7 +225,7 @@ impl GripperModel {
             }
         }
         // Past the measured values: the nearer end's gap.
-        let (first, last) = (self.turns[0], self.turns[self.turns.len() - 1]);
+        let (first, last) = (self.gaps[0], self.gaps[self.gaps.len() - 1]);
         if (value - first.1).abs() <= (value - last.1).abs() {
             first.0
         } else {
@@ -266,11 +266,11 @@ impl GripperModel {
         boxes
     }
 
-    /// Measures the finger joint's jaw gap over its range (`turns`), and sets the opening range
+    /// Measures the finger joint's jaw gap over its range (`gaps`), and sets the opening range
     /// and the widest opening from it. The gap is along the tool frame's y (the closing axis)
     /// between the inner faces of the boxes that move with the joint, those on +y against those
     /// on -y; without boxes on both sides the joint's value is taken as half the opening.
-    fn measure_turns(&mut self, limits: geometry::agent::JointLimits, sliding: bool) {
+    fn measure_gaps(&mut self, limits: geometry::agent::JointLimits, sliding: bool) {
         const STEPS: usize = 64;
         let mut measured: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
         for i in 0..=STEPS {
@@ -285,26 +285,26 @@ impl GripperModel {
         if measured[STEPS].0 < measured[0].0 {
             measured.reverse();
         }
-        let mut turns: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
+        let mut gaps: Vec<(f32, f32)> = Vec::with_capacity(STEPS + 1);
         for (gap, value) in measured {
             // Keep the gap growing: a joint past its widest is not used.
-            if turns.last().is_none_or(|&(g, _)| gap > g) {
-                turns.push((gap, value));
+            if gaps.last().is_none_or(|&(g, _)| gap > g) {
+                gaps.push((gap, value));
             }
         }
         // Sliding fingers whose pads meet closed keep their joint's convention (the value is
         // half the opening; the shipped models leave a millimetre between their pads).
         if sliding
-            && turns
+            && gaps
                 .first()
                 .is_some_and(|&(closed, _)| closed <= SLIDING_PADS_MEET)
         {
             return;
         }
-        if let (Some(&(lo, _)), Some(&(hi, _))) = (turns.first(), turns.last()) {
+        if let (Some(&(lo, _)), Some(&(hi, _))) = (gaps.first(), gaps.last()) {
             self.opening_range = (lo.max(0.0), hi.max(0.0));
             self.max_opening = self.opening_range.1.min(OPENING_CAP);
-            self.turns = turns;
+            self.gaps = gaps;
         }
     }
 
@@ -339,8 +339,8 @@ impl GripperModel {
         Some(left - right)
     }
 
-    /// The widest jaw opening of the model (twice a sliding finger joint's upper limit, a
-    /// turning one's measured gap at its upper limit).
+    /// The widest jaw opening of the model: the measured gap at the finger joint's widest
+    /// end, or twice its upper limit where the gap is not measured.
     pub fn model_opening(&self) -> f32 {
         self.opening_range.1
     }
