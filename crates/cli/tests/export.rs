@@ -168,13 +168,35 @@ fn exported_yaml_reads_back_into_the_plan_json_points() {
             let jt = &t["joint_trajectory"];
             assert!(jt.is_object(), "step {i} trajectory {k} is timed");
             let name = format!(
-                "step-{i:03}-traj-{k}-{}-{}.yaml",
+                "step-{i:03}-traj-{k}-{}-{}",
                 jt["agent"].as_str().unwrap(),
                 jt["group"].as_str().unwrap()
             );
-            expected.push((name, jt.clone()));
+            expected.push((format!("{name}.yaml"), jt.clone()));
+            // A gripper's trajectory of its own: its joint at each point's position.
+            if let Some(joint) = jt["gripper_joint"].as_str() {
+                let points: Vec<Value> = jt["points"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|p| {
+                        serde_json::json!({
+                            "positions": [p["gripper_position"]],
+                            "time_from_start": p["time_from_start"],
+                        })
+                    })
+                    .collect();
+                let g = serde_json::json!({
+                    "group": "gripper", "joint_names": [joint], "points": points,
+                });
+                expected.push((format!("{name}-gripper.yaml"), g));
+            }
         }
     }
+    assert!(
+        expected.iter().any(|(n, _)| n.ends_with("-gripper.yaml")),
+        "some trajectory moves a gripper"
+    );
     assert!(!expected.is_empty(), "the plan has trajectories");
     let written = std::fs::read_dir(&out_dir).unwrap().count();
     assert_eq!(written, expected.len(), "one file per trajectory");
@@ -198,7 +220,11 @@ fn exported_yaml_reads_back_into_the_plan_json_points() {
         assert_eq!(r.points.len(), points.len(), "{name}");
         for (p, q) in points.iter().zip(&r.points) {
             assert_eq!(numbers(&p["positions"]), q.0, "{name}");
-            assert_eq!(numbers(&p["velocities"]), q.1, "{name}");
+            if p.get("velocities").is_some() {
+                assert_eq!(numbers(&p["velocities"]), q.1, "{name}");
+            } else {
+                assert_eq!(q.1.len(), 1, "{name}");
+            }
             assert!(q.2.is_empty());
             let t = p["time_from_start"].as_f64().unwrap();
             let back = q.3 as f64 + q.4 as f64 * 1e-9;

@@ -27,8 +27,10 @@ pub enum Format {
     trajectory_msgs/JointTrajectory: header (stamp 0, frame_id `world` for base drives, else the \
     agent's root link), joint_names, and points with positions, velocities, accelerations and \
     effort (both empty) and time_from_start {sec, nanosec}; a comment line names the step, \
-    action and trajectory. Base drives have the joints base_x, base_y, base_yaw. Numbers are \
-    written so that they read back exactly.\n\nExit codes: 0 written, 3 bad input (unreadable \
+    action and trajectory. Base drives have the joints base_x, base_y, base_yaw. A trajectory \
+    that moves a gripper (`gripper_joint`) also gets `step-SSS-traj-K-AGENT-GROUP-gripper.yaml`: \
+    that joint alone at each point's `gripper_position`, at the same times, for a gripper's \
+    trajectory controller. Numbers are written so that they read back exactly.\n\nExit codes: 0 written, 3 bad input (unreadable \
     or malformed plan JSON, a plan with no joint trajectories, a failed write)."
 )]
 pub struct Args {
@@ -112,14 +114,53 @@ fn yaml_files(plan: &Value) -> Result<Vec<(String, String)>, String> {
             );
             let body = yaml(jt, frame, &comment).map_err(|e| format!("`{path}`: {e}"))?;
             let name = format!(
-                "step-{i:03}-traj-{k}-{}-{}.yaml",
+                "step-{i:03}-traj-{k}-{}-{}",
                 file_part(agent),
                 file_part(group)
             );
-            out.push((name, body));
+            out.push((format!("{name}.yaml"), body));
+            if let Some(g) = gripper_trajectory(jt) {
+                let comment = format!("{comment}: its gripper");
+                let body = yaml(&g, frame, &comment).map_err(|e| format!("`{path}`: {e}"))?;
+                out.push((format!("{name}-gripper.yaml"), body));
+            }
         }
     }
     Ok(out)
+}
+
+/// The gripper's part of joint trajectory `jt` as a joint trajectory of its own, for a
+/// gripper's controller: its `gripper_joint` at each point's `gripper_position`, at the same
+/// times, velocities by central differences (at rest at both ends); `None` where `jt` declares
+/// no gripper or a point lacks its position.
+fn gripper_trajectory(jt: &Value) -> Option<Value> {
+    let joint = jt.get("gripper_joint")?.as_str()?;
+    let points = jt.get("points")?.as_array()?;
+    let at: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| {
+            Some((
+                p.get("time_from_start")?.as_f64()?,
+                p.get("gripper_position")?.as_f64()?,
+            ))
+        })
+        .collect::<Option<_>>()?;
+    let velocity = |i: usize| {
+        if i == 0 || i + 1 >= at.len() || at[i + 1].0 <= at[i - 1].0 {
+            return 0.0;
+        }
+        (at[i + 1].1 - at[i - 1].1) / (at[i + 1].0 - at[i - 1].0)
+    };
+    let points: Vec<Value> = (0..at.len())
+        .map(|i| {
+            serde_json::json!({
+                "positions": [at[i].1],
+                "velocities": [velocity(i)],
+                "time_from_start": at[i].0,
+            })
+        })
+        .collect();
+    Some(serde_json::json!({ "joint_names": [joint], "points": points }))
 }
 
 /// Each agent's root link (its first link in the scene), the frame its arm joints move in.
