@@ -172,31 +172,37 @@ fn held_object_through_object() {
     assert!(f.depth_mm > 30.0, "{}", f.depth_mm);
 }
 
+/// A plan whose one step lifts the book from z 0.77 to 0.82 m held in the right hand, the
+/// robot's links `moved` as each frame's z gives them, the lift's trajectory changed by `more`.
+fn lift_book(
+    moved: impl Fn(f32) -> Vec<(&'static str, [f32; 3])>,
+    more: impl FnOnce(&mut serde_json::Value),
+) -> serde_json::Value {
+    let mut plan = scene();
+    let frames = [0.77, 0.82]
+        .iter()
+        .map(|&z| posture(BOT, &moved(z)))
+        .collect();
+    let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+    let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
+    more(&mut traj);
+    push_step(
+        &mut plan,
+        "pick",
+        "book",
+        vec![traj],
+        json!([]),
+        json!([]),
+        json!({ "book": at(1.0, -0.2, 0.82) }),
+    );
+    plan
+}
+
 #[test]
 fn a_hand_may_squeeze_what_it_holds_but_not_pass_through_it() {
     let lift = |palm_over_book: f32| {
-        let mut plan = scene();
-        let frames = [0.77, 0.82]
-            .iter()
-            .map(|&z| {
-                posture(
-                    BOT,
-                    &[("r_gripper_palm_link", [1.0, -0.2, z + palm_over_book])],
-                )
-            })
-            .collect();
-        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
-        let traj = trajectory("bot", "lift", frames, Some(("book", held)));
-        push_step(
-            &mut plan,
-            "pick",
-            "book",
-            vec![traj],
-            json!([]),
-            json!([]),
-            json!({ "book": at(1.0, -0.2, 0.82) }),
-        );
-        check(&plan)
+        let palm = move |z: f32| vec![("r_gripper_palm_link", [1.0, -0.2, z + palm_over_book])];
+        check(&lift_book(palm, |_| {}))
     };
     // The palm (half height 0.03) 0.045 m over the book's centre (half height 0.02): 5 mm in.
     let r = lift(0.045);
@@ -921,33 +927,20 @@ fn a_head_turns_only_as_far_as_its_joints_allow() {
 #[test]
 fn a_finger_must_grip_what_the_hand_carries() {
     let lift = |finger_beside_book: bool| {
-        let mut plan = scene();
-        let frames = [0.77, 0.82]
-            .iter()
-            .map(|&z| {
-                let mut moved = vec![("r_gripper_palm_link", [1.0, -0.2, z + 0.045])];
-                if finger_beside_book {
-                    // The book's -y face at -0.27; the finger's half width 5 mm: 1 mm apart.
-                    moved.push(("r_gripper_l_finger_link", [1.0, -0.276, z]));
-                }
-                posture(BOT, &moved)
-            })
-            .collect();
-        let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
-        let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
-        let mut jt = joint_trajectory();
-        jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
-        traj["joint_trajectory"] = jt;
-        push_step(
-            &mut plan,
-            "pick",
-            "book",
-            vec![traj],
-            json!([]),
-            json!([]),
-            json!({ "book": at(1.0, -0.2, 0.82) }),
-        );
-        check(&plan)
+        let hand = move |z: f32| {
+            let mut moved = vec![("r_gripper_palm_link", [1.0, -0.2, z + 0.045])];
+            if finger_beside_book {
+                // The book's -y face at -0.27; the finger's half width 5 mm: 1 mm apart.
+                moved.push(("r_gripper_l_finger_link", [1.0, -0.276, z]));
+            }
+            moved
+        };
+        let gripper = |traj: &mut serde_json::Value| {
+            let mut jt = joint_trajectory();
+            jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
+            traj["joint_trajectory"] = jt;
+        };
+        check(&lift_book(hand, gripper))
     };
     let r = lift(true);
     assert!(r.faults.is_empty(), "{:#?}", kinds(&r));

@@ -164,12 +164,12 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
                 // MoveIt's setup assistant may write a passive joint inside a group.
                 for c in e.children.iter().filter(|c| c.name == "passive_joint") {
                     s.passive_joints
-                        .push(passive_joint(&src, c, model, &s.virtual_joints)?);
+                        .push(joint_or_virtual(&src, c, model, &s.virtual_joints)?);
                 }
             }
             "passive_joint" => {
                 s.passive_joints
-                    .push(passive_joint(&src, e, model, &s.virtual_joints)?);
+                    .push(joint_or_virtual(&src, e, model, &s.virtual_joints)?);
             }
             "end_effector" => s.end_effectors.push(end_effector(&src, e, model)?),
             "group_state" => s.group_states.push(group_state(&src, e, model)?),
@@ -254,9 +254,9 @@ fn known_link(src: &Source, model: &AgentModel, name: &str, at: Pos) -> Result<(
     })
 }
 
-/// A `<passive_joint>`'s name: a joint of the model, or a virtual joint (MoveIt's Baxter marks
-/// its planar `world_joint` passive).
-fn passive_joint(
+/// The name of element `e` naming a joint: a joint of the model, or a virtual joint (a group
+/// may list it; MoveIt's Baxter marks its planar `world_joint` passive).
+fn joint_or_virtual(
     src: &Source,
     e: &Element,
     model: &AgentModel,
@@ -300,13 +300,9 @@ fn group(
                     .map_err(|err| src.err(c.at, err.to_string()))?;
                 g.chain = Some((base.to_string(), tip.to_string()));
             }
-            "joint" => {
-                let (name, at) = src.attr(c, "name")?;
-                if !virtual_joints.iter().any(|v| v.0 == name) {
-                    known_joint(src, model, name, at)?;
-                }
-                g.joints.push(name.to_string());
-            }
+            "joint" => g
+                .joints
+                .push(joint_or_virtual(src, c, model, virtual_joints)?),
             "group" => g.subgroups.push(src.attr(c, "name")?.0.to_string()),
             "link" => {
                 let (name, at) = src.attr(c, "name")?;
