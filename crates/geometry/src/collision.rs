@@ -40,6 +40,7 @@ use parry3d::query;
 use parry3d::shape::{Shape, SharedShape};
 
 use crate::agent::{AgentModel, ModelError};
+use pair_cells::CellProof;
 
 mod base_sweep;
 mod climbing_hull;
@@ -921,17 +922,20 @@ impl CollisionChecker {
                 let d = centres[g.a as usize] - centres[g.b as usize];
                 if d.length_squared() > (ra + rb) * (ra + rb)
                     || self.agent.capsule_gap(g, links) > 0.0
-                    || self.agent.proven_apart(g, q)
                 {
                     continue;
                 }
-                for (k, &(a, b)) in pairs
-                    .iter()
-                    .enumerate()
-                    .take(g.end as usize)
-                    .skip(g.start as usize)
-                {
-                    let (a, b) = (a as usize, b as usize);
+                // The group's shape pairs (indices into `pairs`) that its cells leave to test.
+                let (start, end) = (g.start as usize, g.end as usize);
+                let only = match self.agent.cell_proof(g, q) {
+                    CellProof::Apart => continue,
+                    CellProof::Only(list) => Some(list),
+                    CellProof::All => None,
+                };
+                let listed = only.into_iter().flatten().map(|&k| start + k as usize);
+                let whole = (start..end).filter(|_| only.is_none());
+                for k in listed.chain(whole) {
+                    let (a, b) = (pairs[k].0 as usize, pairs[k].1 as usize);
                     let r = shapes[a].radius + shapes[b].radius;
                     if (poses[a].translation - poses[b].translation).length_squared() > r * r {
                         continue;

@@ -198,6 +198,17 @@ impl Segment {
     }
 }
 
+/// What the cells of a pair of links say at one configuration ([`CellProver::free`]).
+pub(super) enum CellProof<'c> {
+    /// Every shape pair is apart.
+    Apart,
+    /// Only these shape pairs (indices into the pair's list) are to be tested; the others
+    /// are apart.
+    Only(&'c [u16]),
+    /// Every shape pair is to be tested (no cells, or beyond a joint's limits).
+    All,
+}
+
 /// What a cell says of a pair ([`CellProver::look`]).
 enum Look<'c> {
     Free,
@@ -273,13 +284,20 @@ impl CellProver<'_> {
             .collect()
     }
 
-    /// Whether shape pairs `pairs` are apart wherever configuration `q` puts them in `cells`:
-    /// the proofs of the cells `q` lies in, largest first, each made on first use. False
-    /// beyond a joint's limits.
-    pub(super) fn free(&self, cells: &PairCells, pairs: &[(u16, u16)], q: &[f32]) -> bool {
+    /// What the cells say of shape pairs `pairs` at configuration `q`: apart (the proofs of
+    /// the cells `q` lies in, largest first, each made on first use), or which of the pairs
+    /// (indices into `pairs`) remain to be tested: those the cell that failed had to prove,
+    /// the others being apart over a larger cell that holds it; all of them beyond a
+    /// joint's limits.
+    pub(super) fn free<'c>(
+        &self,
+        cells: &'c PairCells,
+        pairs: &[(u16, u16)],
+        q: &[f32],
+    ) -> CellProof<'c> {
         let [a, b] = &cells.axes;
         let (Some(s), Some(t)) = (a.position(q[a.dof]), b.position(q[b.dof])) else {
-            return false;
+            return CellProof::All;
         };
         let (mut list, mut unproven): (&[Cell], &[u16]) = (&cells.largest, &cells.all);
         for level in 0..LEVELS {
@@ -287,12 +305,12 @@ impl CellProver<'_> {
             let at = ((s * scale) as i64, (t * scale) as i64);
             let cell = &list[cells.sibling(at, level)];
             match self.look(cells, cell, (at, level), (pairs, unproven)) {
-                Look::Free => return true,
-                Look::Unproven => return false,
+                Look::Free => return CellProof::Apart,
+                Look::Unproven => return CellProof::Only(unproven),
                 Look::Smaller(smaller, left) => (list, unproven) = (smaller, left),
             }
         }
-        false
+        CellProof::Only(unproven)
     }
 
     /// Whether shape pairs `pairs` are apart all along the straight motion from

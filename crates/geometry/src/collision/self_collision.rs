@@ -15,7 +15,7 @@ use super::climbing_hull::{ClimbingHull, climbing_hull_of, gjk};
 use super::intersects;
 use super::link_capsule::LinkCapsule;
 use super::motion::{JointReach, body, lower_bound_distance};
-use super::pair_cells::{CellProver, PairCells};
+use super::pair_cells::{CellProof, CellProver, PairCells};
 use crate::agent::{AgentModel, ModelError};
 
 /// How the self-collision pairs to ignore are found.
@@ -687,10 +687,14 @@ impl SelfCollisionModel {
         c.ball_gap(link, centre, radius)
     }
 
-    /// Whether the links of `group` are proven apart in configuration `q` by their cells
-    /// (see `pair_cells.rs`); false for a pair without cells.
-    pub(super) fn proven_apart(&self, group: &PairGroup, q: &[f32]) -> bool {
-        self.with_cells(group, |prover, cells, pairs| prover.free(cells, pairs, q))
+    /// What the cells of the links of `group` (see `pair_cells.rs`) say in configuration
+    /// `q`: apart, or which of the group's shape pairs remain to be tested; every pair for a
+    /// group without cells.
+    pub(super) fn cell_proof(&self, group: &PairGroup, q: &[f32]) -> CellProof<'_> {
+        match self.cells.get(group.cells as usize) {
+            Some(cells) => self.prover().free(cells, self.group_pairs(group), q),
+            None => CellProof::All,
+        }
     }
 
     /// Whether the links of `group` are proven apart all along the straight motion from `a`
@@ -709,16 +713,20 @@ impl SelfCollisionModel {
         let Some(cells) = self.cells.get(group.cells as usize) else {
             return false;
         };
-        let prover = CellProver {
+        proof(&self.prover(), cells, self.group_pairs(group))
+    }
+
+    fn prover(&self) -> CellProver<'_> {
+        CellProver {
             model: &self.model,
             shapes: &self.shapes,
             reach: &self.reach,
-        };
-        proof(
-            &prover,
-            cells,
-            &self.pairs[group.start as usize..group.end as usize],
-        )
+        }
+    }
+
+    /// The shape pairs of `group`.
+    fn group_pairs(&self, group: &PairGroup) -> &[(u16, u16)] {
+        &self.pairs[group.start as usize..group.end as usize]
     }
 
     /// The agent model.
