@@ -243,14 +243,18 @@ impl GripperModel {
         self.links.iter().any(|link| {
             let at_link = to_tool * pose_along(&link.path, value);
             link.boxes.iter().any(|b| {
-                let at = at_link * b.in_link;
-                let own: &dyn Shape = match &b.shape {
-                    Some(s) => &**s,
-                    None => &b.cuboid,
+                let meet = |at: &Pose, own: &dyn Shape| {
+                    query::intersection_test(at, own, pose, shape)
+                        .map(|hit| hit.intersecting)
+                        .unwrap_or(true)
                 };
-                query::intersection_test(&at, own, pose, shape)
-                    .map(|hit| hit.intersecting)
-                    .unwrap_or(true)
+                // A hull is tested where its box meets the shape (the box test is cheap).
+                let (boxed, cuboid) = b.at(at_link);
+                meet(&boxed, &cuboid)
+                    && match &b.shape {
+                        Some(own) => meet(&(at_link * b.in_link), &**own),
+                        None => true,
+                    }
             })
         })
     }
