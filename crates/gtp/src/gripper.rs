@@ -251,9 +251,15 @@ impl GripperModel {
                 // A hull is tested where its box meets the shape (the box test is cheap).
                 let (boxed, cuboid) = b.at(at_link);
                 meet(&boxed, &cuboid)
-                    && match &b.shape {
-                        Some(own) => meet(&(at_link * b.in_link), &**own),
-                        None => true,
+                    && match (&b.shape, &b.bounds) {
+                        (Some(own), bounds) => {
+                            let at = at_link * b.in_link;
+                            bounds
+                                .as_ref()
+                                .and_then(|h| h.intersects(&at, shape, pose))
+                                .unwrap_or_else(|| meet(&at, &**own))
+                        }
+                        (None, _) => true,
                     }
             })
         })

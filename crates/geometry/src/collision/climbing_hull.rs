@@ -15,7 +15,7 @@ use parry3d::bounding_volume::Aabb;
 use parry3d::math::{Pose, Vector};
 use parry3d::query::details::intersection_test_support_map_support_map_with_params;
 use parry3d::query::gjk::VoronoiSimplex;
-use parry3d::shape::{ConvexPolyhedron, SharedShape, SupportMap};
+use parry3d::shape::{ConvexPolyhedron, Shape, SharedShape, SupportMap};
 use parry3d::transformation::convex_hull;
 
 /// Hulls with more vertices than this get a [`ClimbingHull`]; below it a scan is as fast.
@@ -188,6 +188,14 @@ impl HullBounds {
             mins[i] = extreme(2 * i + 1, -d)[i];
         }
         Aabb::new(mins, maxs)
+    }
+
+    /// Whether the hull at `pose` meets `other` at `other_pose`: GJK with the hull's climbing
+    /// support, from its default start, where `other` has a support function (`None` where
+    /// not).
+    pub fn intersects(&self, pose: &Pose, other: &dyn Shape, other_pose: &Pose) -> Option<bool> {
+        let b = other.as_support_map()?;
+        Some(gjk(pose, &*self.hull, other_pose, b))
     }
 }
 
