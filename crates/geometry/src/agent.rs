@@ -851,6 +851,28 @@ impl AgentModel {
         false
     }
 
+    /// Link `link` and the links fixed to it: those joined to it by fixed joints alone (a
+    /// camera's frame, the housing it sits in, the frames on that), in link order.
+    pub fn rigid_links(&self, link: usize) -> Vec<usize> {
+        let fixed = |l: usize| {
+            self.links[l]
+                .parent_joint
+                .is_some_and(|j| !self.joints[j].is_movable())
+        };
+        let mut root = link;
+        while let (true, Some(p)) = (fixed(root), self.links[root].parent) {
+            root = p;
+        }
+        let mut out = vec![root];
+        let mut k = 0;
+        while let Some(&l) = out.get(k) {
+            k += 1;
+            out.extend(self.links[l].children.iter().filter(|&&c| fixed(c)));
+        }
+        out.sort_unstable();
+        out
+    }
+
     /// The nearest ancestor of `link` (itself included) that has collision shapes.
     pub fn geometric_ancestor(&self, link: usize) -> Option<usize> {
         let mut cur = Some(link);

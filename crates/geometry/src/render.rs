@@ -282,6 +282,24 @@ pub fn render_visual(
     (render_scene(&scene, camera, width, height), drawn.warnings)
 }
 
+/// What agent `agent` sees from its eye ([`agent_camera`]), drawn as [`render_visual`] does,
+/// but for the housing of the eye: a visual mesh of a link fixed to the eye link (a head's
+/// screen, a camera's case) whose box holds the eye is left out, its link drawn by its
+/// collision shapes, which [`render`] leaves out where they hold the eye. A visual mesh is a
+/// shell (often open), so the eye inside it would see nothing but its walls (Baxter's head
+/// camera, inside its screen's mesh).
+pub fn render_eye_view(
+    world: &World,
+    agent: AgentId,
+    width: usize,
+    height: usize,
+) -> (Rendered, Vec<String>) {
+    let camera = agent_camera(world, agent);
+    let drawn = VisualBodies::seen_by(world, Some(agent));
+    let scene = SceneBvh::from_bodies(outside(drawn.bodies(), &camera));
+    (render_scene(&scene, &camera, width, height), drawn.warnings)
+}
+
 /// The shapes a picture with visual meshes draws, owned (visual meshes are built here).
 pub struct VisualBodies {
     shapes: Vec<(BodyOwner, SharedShape, parry3d::math::Pose, [u8; 3])>,
@@ -293,13 +311,37 @@ pub struct VisualBodies {
 impl VisualBodies {
     /// The world's objects, and its agents' links by their visual meshes where they have any.
     pub fn of(world: &World) -> VisualBodies {
+        VisualBodies::seen_by(world, None)
+    }
+
+    /// [`VisualBodies::of`], seen from the eye of `viewer` where given: the visual meshes of
+    /// its eye's housing left out (see [`render_eye_view`]).
+    fn seen_by(world: &World, viewer: Option<AgentId>) -> VisualBodies {
         let mut shapes = Vec::new();
         let mut warnings = Vec::new();
         let mut by_visuals = std::collections::HashSet::new();
         for a in world.agent_ids() {
             let info = world.agent(a);
             let poses = world.agent_state(a).link_poses();
+            let housing = match viewer {
+                Some(v) if v == a => info.model.rigid_links(info.eye_link),
+                _ => Vec::new(),
+            };
+            let eye = world.eye_pose(a).translation;
             for (li, link) in info.model.links().iter().enumerate() {
+                let holds_eye = |v: &crate::agent::VisualMesh, shape: &SharedShape| {
+                    housing.contains(&li)
+                        && shape
+                            .compute_aabb(&(poses[li] * v.local_pose))
+                            .contains_local_point(eye)
+                };
+                if link
+                    .visuals
+                    .iter()
+                    .any(|v| visual_shape(&v.path, v.scale).is_ok_and(|s| holds_eye(v, &s)))
+                {
+                    continue;
+                }
                 let mut drawn = Vec::new();
                 for v in &link.visuals {
                     match visual_shape(&v.path, v.scale) {

@@ -202,3 +202,66 @@ fn an_unreadable_visual_mesh_falls_back_with_a_warning() {
     );
     assert_eq!(visual.count(link), render(&w, &cam, 100, 100).count(link));
 }
+
+/// A robot whose eye sits inside the visual mesh of its head (a shell around the camera, as
+/// Baxter's screen is), a red box in front of it.
+fn robot_with_a_housed_eye() -> World {
+    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-visual-housed-{}", std::process::id()));
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::write(root.join("head.stl"), common::box_stl([0.2, 0.2, 0.2])).unwrap();
+    std::fs::write(
+        root.join("bot.urdf"),
+        r#"<robot name="bot">
+  <link name="base_link">
+    <collision><origin xyz="0 0 0.5"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision>
+    <visual><origin xyz="0 0 0.5"/><geometry><mesh filename="head.stl"/></geometry></visual>
+  </link>
+  <link name="eye"/>
+  <joint name="eye_joint" type="fixed">
+    <parent link="base_link"/><child link="eye"/><origin xyz="0 0 0.5"/>
+  </joint>
+</robot>"#,
+    )
+    .unwrap();
+    std::fs::write(root.join("bot.srdf"), r#"<robot name="bot"/>"#).unwrap();
+    let scene = r#"
+[scene]
+bounds = { min = [-1, -1, 0], max = [2, 1, 1] }
+
+[[objects]]
+name = "red"
+shape = { box = [0.1, 0.2, 0.2] }
+pose = { xyz = [1.2, 0.0, 0.5] }
+colour = [200, 30, 30]
+
+[[agents]]
+name = "bot"
+kind = "robot"
+urdf = "bot.urdf"
+eye = "eye"
+hands = ["eye"]
+shoulders = ["base_link"]
+colour = [30, 30, 200]
+base = { x = 0, y = 0, yaw = 0 }
+"#;
+    World::from_scene(Scene::from_str(scene, "h.toml", &root, "h").unwrap()).unwrap()
+}
+
+#[test]
+fn an_eye_inside_its_heads_visual_mesh_sees_out_of_it() {
+    let w = robot_with_a_housed_eye();
+    let bot = w.agent_id("bot").unwrap();
+    let model = &w.agent(bot).model;
+    assert_eq!(model.rigid_links(model.link_id("eye").unwrap()), vec![0, 1]);
+    let red = BodyOwner::Object(w.object_id("red").unwrap());
+    // Drawn as any camera draws the world, the head's mesh fills the picture.
+    let (walled, _) = render_visual(&w, &agent_camera(&w, bot), 80, 60);
+    assert_eq!(walled.count(red), 0);
+    assert!(walled.count(BodyOwner::Agent(bot, 0)) > 80 * 60 / 2);
+    // From the eye, the housing is left out: the box ahead fills the middle.
+    let (seen, warnings) = geometry::render::render_eye_view(&w, bot, 80, 60);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(seen.ids[30 * 80 + 40], Some(red));
+    assert_eq!(seen.count(BodyOwner::Agent(bot, 0)), 0);
+}

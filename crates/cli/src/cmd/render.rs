@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use geometry::effort::aim_head;
-use geometry::render::{Camera, agent_camera, render_visual};
+use geometry::render::{Camera, agent_camera, render_eye_view, render_visual};
 use geometry::scene::AgentKind;
 
 /// Arguments of `htngtp render`.
@@ -100,7 +100,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             (Camera::top(&b, args.width as f32 / h as f32), h)
         }
     };
-    let (img, warnings) = render_visual(&world, &camera, args.width, height);
+    let (img, warnings) = match agent {
+        Some(a) => render_eye_view(&world, a, args.width, height),
+        None => render_visual(&world, &camera, args.width, height),
+    };
     for w in warnings {
         eprintln!("warning: {w}");
     }
