@@ -19,9 +19,6 @@ use serde_json::{Value, json};
 use super::{link_poses_json, pose_json};
 use crate::timing;
 
-/// How many points the gripper takes to move from where it was to the trajectory's opening.
-const GRIPPER_POINTS: usize = 5;
-
 /// Settings of the exported timing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimingOptions {
@@ -212,15 +209,19 @@ pub fn trajectory_json(
             (k, from, to, a.gripper_followers.as_slice())
         });
     let holding = t.held.as_ref().map(|h| h.object.clone());
-    let steps = GRIPPER_POINTS.min(points.len().saturating_sub(1)).max(1);
+    // The gripper moves to the trajectory's opening first, the arm still (closing on an object
+    // before lifting it, opening before leaving it), then the arm moves.
+    let lead = gripper
+        .map(|(k, from, to, _)| gripper_lead(&model, k, (from, to), cx.opts))
+        .unwrap_or_default();
+    let points = with_lead(points, &lead);
     let (mut frames, mut json_points) = (Vec::new(), Vec::new());
     for (j, p) in points.iter().enumerate() {
         let state = world.agent_state(agent);
         let (mut base, mut q) = (state.base, state.q.clone());
         let mut gripper_position = Value::Null;
-        if let Some((k, from, to, followers)) = gripper {
-            let s = (j as f32 / steps as f32).min(1.0);
-            q[k] = from + (to - from) * s;
+        if let Some((k, _, to, followers)) = gripper {
+            q[k] = lead.get(j).map_or(to, |&(_, v)| v as f32);
             for &f in followers {
                 q[f] = q[k];
             }
@@ -282,6 +283,44 @@ pub fn trajectory_json(
     value["frames"] = Value::Array(frames);
     value["joint_trajectory"]["points"] = Value::Array(json_points);
     (value, world)
+}
+
+/// The gripper's motion from value `from` to `to` of degree of freedom `k`, timed within its
+/// limits: (seconds, value) per point; none where it does not move.
+fn gripper_lead(
+    model: &AgentModel,
+    k: usize,
+    (from, to): (f32, f32),
+    opts: &TimingOptions,
+) -> Vec<(f64, f64)> {
+    if (to - from).abs() <= 1e-6 {
+        return Vec::new();
+    }
+    let (v, a) = joint_limits(model, &model.dof_names()[k], opts);
+    let path = [vec![f64::from(from)], vec![f64::from(to)]];
+    match timing::time_path(&path, &[v], &[a]) {
+        Ok(timed) => timed.iter().map(|p| (p.time, p.positions[0])).collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+/// `points` after the gripper's `lead`: the first point held still through the lead's times,
+/// then the rest shifted by its duration.
+fn with_lead(points: Vec<timing::TimedPoint>, lead: &[(f64, f64)]) -> Vec<timing::TimedPoint> {
+    let (Some(first), Some(&(duration, _))) = (points.first(), lead.last()) else {
+        return points;
+    };
+    let still = |time: f64| timing::TimedPoint {
+        positions: first.positions.clone(),
+        velocities: vec![0.0; first.velocities.len()],
+        time,
+    };
+    let mut out: Vec<timing::TimedPoint> = lead.iter().map(|&(time, _)| still(time)).collect();
+    out.extend(points.into_iter().skip(1).map(|mut p| {
+        p.time += duration;
+        p
+    }));
+    out
 }
 
 /// Writes one point's `positions` of `joints` into the base pose and the configuration `q`;
