@@ -136,6 +136,42 @@ fn penetration(a: &Body<'_>, b: &Body<'_>) -> Option<f32> {
     (-c.dist > CONTACT_TOLERANCE_M).then_some(-c.dist)
 }
 
+/// How deep two bodies overlap where they touch at all (0 for touching): what the planner's
+/// collision checks count, which leave no tolerance.
+fn touching(a: &Body<'_>, b: &Body<'_>) -> Option<f32> {
+    let (ba, bb) = (a.shape.compute_aabb(&a.pose), b.shape.compute_aabb(&b.pose));
+    if !ba.intersects(&bb) {
+        return None;
+    }
+    let c = parry3d::query::contact(&a.pose, &**a.shape, &b.pose, &**b.shape, 0.0).ok()??;
+    Some((-c.dist).max(0.0))
+}
+
+/// Why a model has no arm, for the error that says so: its SRDF's end effectors that end no
+/// group, or that it has none.
+fn no_arm_hint(model: &AgentModel) -> String {
+    let orphans: Vec<String> = model
+        .semantics()
+        .end_effectors
+        .iter()
+        .filter(|e| {
+            e.parent_group
+                .as_ref()
+                .is_none_or(|g| model.chain(g).is_err())
+        })
+        .map(|e| format!("`{}` (parent_link `{}`)", e.name, e.parent_link))
+        .collect();
+    if orphans.is_empty() {
+        "give the model an SRDF with arms (groups ending in an `end_effector`)".into()
+    } else {
+        format!(
+            "the SRDF's end effector {} ends no arm group whose chain holds its parent_link \
+             (a chain group sharing no movable joint with it): give it a `parent_group`",
+            orphans.join(", ")
+        )
+    }
+}
+
 /// Per link: whether it is rigidly fixed to the root (the robot's base; the links are in
 /// topological order, parents first).
 fn base_links(model: &AgentModel) -> Vec<bool> {
@@ -365,18 +401,19 @@ impl World {
                 .iter()
                 .filter_map(|a| model.chain(a).ok())
                 .collect();
-            let links_or = |key: &str, given: &Option<Vec<String>>, found: Vec<usize>| {
-                match given {
+            let links_or = |key: &str, given: &Option<Vec<String>>, found: Vec<usize>| match given {
                 Some(list) => list
                     .iter()
                     .map(|n| link(key, n))
                     .collect::<Result<Vec<_>, _>>(),
                 None if found.is_empty() => Err(scene.error(
                     &at,
-                    format!("no {key} links: give the model an SRDF with arms (groups ending in an `end_effector`), or name them with `{key} = [..]`"),
+                    format!(
+                        "no {key} links: {}, or name them with `{key} = [..]`",
+                        no_arm_hint(&model)
+                    ),
                 )),
                 None => Ok(found),
-            }
             };
             // A shoulder is the link its arm's first movable joint turns; a hand, the arm's tip.
             let shoulders = arms
@@ -430,8 +467,9 @@ impl World {
     }
 
     /// The first overlap deeper than [`CONTACT_TOLERANCE_M`] between a movable object and
-    /// another object, or between a robot's base (its links rigidly fixed to the root; an arm
-    /// may start against a wall) and an object, as an error naming both: a
+    /// another object, or the first contact at all between a robot's base (its links rigidly
+    /// fixed to the root; an arm may start against a wall) and an object, as an error naming
+    /// both: a
     /// scene that starts in collision would only make every plan fail ("no plan exists")
     /// without saying why. Furniture may overlap furniture (walls joined at a corner), and
     /// people are not checked (a seated person's model rests in the chair).
@@ -505,10 +543,41 @@ impl World {
             matches!(b.owner, BodyOwner::Agent(a, l)
                 if self.agent(a).kind() == AgentKind::Robot && bases[a.0][l])
         });
-        robot_links
+        // No tolerance here: the base never moves relative to the scene, and the planner counts
+        // touching as a collision, so every motion would fail (an arm's base flush on its table).
+        let (a, b, depth) = robot_links
             .flat_map(|l| objects.iter().map(move |o| (l, *o)))
-            .find_map(|(a, b)| Some((a, b, penetration(a, b)?)))
-            .map(|(a, b, depth)| self.overlap_error(a, b, depth))
+            .find_map(|(a, b)| Some((a, b, touching(a, b)?)))?;
+        match (a.owner, b.owner) {
+            (BodyOwner::Agent(ag, l), BodyOwner::Object(o)) => {
+                Some(self.base_contact_error(ag, l, o, depth))
+            }
+            _ => Some(self.overlap_error(a, b, depth)),
+        }
+    }
+
+    /// The error for link `l` of robot `ag`'s base touching object `o` (`depth` metres deep).
+    fn base_contact_error(&self, ag: AgentId, l: usize, o: ObjectId, depth: f32) -> SceneError {
+        let (object, agent) = (&self.object(o).name, self.agent(ag));
+        let who = format!(
+            "`{}` (its link `{}`, fixed to its base)",
+            agent.name(),
+            agent.model.links()[l].name
+        );
+        let message = if depth > CONTACT_TOLERANCE_M {
+            format!(
+                "{who} starts inside `{object}` ({:.1} mm deep): a robot's base must start clear \
+                 of the scene; move the base (`base`)",
+                depth * 1000.0
+            )
+        } else {
+            format!(
+                "{who} touches `{object}`: a robot's base must start clear of the scene, since \
+                 the planner counts touching as a collision and every motion would fail; move \
+                 the base (`base`: a millimetre up is enough for a base resting on a table)"
+            )
+        };
+        self.scene().error(&format!("agents[{}]", ag.0), message)
     }
 
     /// The error for body `a` overlapping object `b` by `depth` metres, at `a`'s key path.

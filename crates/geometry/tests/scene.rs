@@ -250,3 +250,95 @@ fn a_posture_may_be_a_list_of_group_states() {
     let none = scene("[]");
     assert_ne!(one.agent_state(fetch).q, none.agent_state(fetch).q);
 }
+
+/// A robot whose base rests flush on its table (an arm bolted to a table top, `base.z` the
+/// table's height) is refused at load, naming both and saying what to do: the planner counts
+/// touching as a collision, so every motion of it would fail; a millimetre up, it loads.
+#[test]
+fn a_robot_base_touching_the_scene_is_refused_with_the_fix() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-flush-base-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("arm.urdf"),
+        r#"<robot name="arm">
+  <link name="base"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="upper"><collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.2"/></geometry></collision></link>
+  <joint name="turn" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>"#,
+    )
+    .unwrap();
+    let scene = |z: &str| {
+        format!(
+            r#"
+[[objects]]
+name = "table"
+shape = {{ box = [0.5, 0.5, 0.375] }}
+pose = {{ xyz = [0, 0, 0.375] }}
+support = true
+
+[[agents]]
+name = "arm"
+kind = "robot"
+urdf = "arm.urdf"
+eye = "upper"
+hands = ["upper"]
+shoulders = ["upper"]
+base = {{ x = 0, y = 0, yaw = 0, z = {z} }}
+"#
+        )
+    };
+    let flush = Scene::from_str(&scene("0.75"), "flush.toml", &dir, "flush").unwrap();
+    let e = World::from_scene(flush).unwrap_err().to_string();
+    assert!(
+        e.contains("agents[0]: `arm` (its link `base`, fixed to its base) touches `table`")
+            && e.contains("a millimetre up"),
+        "{e}"
+    );
+    let raised = Scene::from_str(&scene("0.751"), "raised.toml", &dir, "raised").unwrap();
+    assert!(World::from_scene(raised).is_ok());
+}
+
+/// An SRDF whose end effector ends no group (none holds its parent link) says so at load,
+/// naming the end effector and what to add, instead of asking for an end effector.
+#[test]
+fn an_end_effector_ending_no_arm_is_named() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-orphan-hand-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("arm.urdf"),
+        r#"<robot name="arm">
+  <link name="base"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="upper"><collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.2"/></geometry></collision></link>
+  <joint name="turn" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("arm.srdf"),
+        r#"<robot name="arm">
+  <group name="hand"><link name="upper"/></group>
+  <end_effector name="hand" parent_link="upper" group="hand"/>
+</robot>"#,
+    )
+    .unwrap();
+    let text = r#"
+[[agents]]
+name = "arm"
+kind = "robot"
+urdf = "arm.urdf"
+srdf = "arm.srdf"
+eye = "upper"
+base = { x = 0, y = 0, yaw = 0 }
+"#;
+    let scene = Scene::from_str(text, "orphan.toml", &dir, "orphan").unwrap();
+    let e = World::from_scene(scene).unwrap_err().to_string();
+    assert!(
+        e.contains("no shoulders links: the SRDF's end effector `hand` (parent_link `upper`) ends no arm group")
+            && e.contains("give it a `parent_group`"),
+        "{e}"
+    );
+}

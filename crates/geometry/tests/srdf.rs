@@ -181,6 +181,32 @@ fn groups_of_joints_and_links_and_an_inferred_arm_are_read_as_moveit_reads_them(
     assert!(gripper.chain.is_none());
 }
 
+/// As xArm's MoveIt SRDF has it: the arm's group lists the fixed joints out to the tool frame,
+/// and the gripper's group, given by links, brings the same fixed joints; the end effector
+/// names no `parent_group`. Only movable joints shared with the gripper rule a group out, so
+/// the arm is found, ending at the tool frame.
+#[test]
+fn an_arm_sharing_fixed_joints_with_its_gripper_is_inferred() {
+    let arm: String = common::PR2_RIGHT_ARM
+        .iter()
+        .chain(&["r_gripper_palm_joint", "r_gripper_tool_joint"])
+        .map(|j| format!("<joint name=\"{j}\"/>"))
+        .collect();
+    let srdf = format!(
+        "<robot name=\"pr2\">\n\
+         <group name=\"arm\">{arm}</group>\n\
+         <group name=\"gripper\"><link name=\"r_gripper_palm_link\"/>\
+         <link name=\"r_gripper_l_finger_link\"/><link name=\"r_gripper_r_finger_link\"/>\
+         <link name=\"r_gripper_tool_frame\"/></group>\n\
+         <end_effector name=\"gripper\" parent_link=\"r_gripper_tool_frame\" group=\"gripper\"/>\n\
+         </robot>"
+    );
+    let pr2 = pr2_alone().with_srdf_str(&srdf, "xarm-like.srdf").unwrap();
+    assert_eq!(pr2.arm_names(), ["arm"]);
+    let chain = pr2.chain("arm").unwrap();
+    assert_eq!(pr2.links()[chain.tip_link].name, "r_gripper_tool_frame");
+}
+
 /// MoveIt's Baxter SRDF marks its virtual joint passive: read, as MoveIt reads it; a passive
 /// joint that is neither a joint nor a virtual joint is an error with its position.
 #[test]

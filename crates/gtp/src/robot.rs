@@ -216,7 +216,8 @@ impl RobotSetup {
         }
         if arms.is_empty() {
             return Err(format!(
-                "agent `{}` has no arm chain (right_arm or left_arm)",
+                "agent `{}` has no arm: no SRDF group ends at an `end_effector` (see \
+                 docs/guide.md, \"Your own robot\")",
                 world.agent(agent).name()
             ));
         }

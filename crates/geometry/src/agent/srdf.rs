@@ -19,7 +19,7 @@
 //! * `<end_effector name=".." parent_link=".." group=".." parent_group=".."/>`: the hand or
 //!   gripper of the arm `parent_group` (without one, as MoveIt does: the group whose chain ends
 //!   at `parent_link`, else the one with the fewest joints whose chain holds it and none of the
-//!   end effector's joints); its `group`'s first joint that mimics none is the
+//!   end effector's movable joints); its `group`'s first joint that mimics none is the
 //!   gripper's joint (none for a person's hand), and the others that mimic none with its kind
 //!   and limits follow it (fingers each on a joint of its own).
 //! * `<group_state name=".." group="..">` with `<joint name=".." value=".."/>`: a named posture
@@ -189,8 +189,8 @@ pub fn read(text: &str, source_name: &str, model: &AgentModel) -> Result<Semanti
 }
 
 /// An end effector without `parent_group` ends, as MoveIt infers it, a group whose chain
-/// holds its `parent_link` and none of the end effector's own joints: the one whose chain ends
-/// there, else the one with the fewest joints.
+/// holds its `parent_link` and none of the end effector's own movable joints: the one whose
+/// chain ends there, else the one with the fewest joints.
 fn infer_parent_groups(s: &mut Semantics, model: &AgentModel) {
     for i in 0..s.end_effectors.len() {
         let e = &s.end_effectors[i];
@@ -208,10 +208,12 @@ fn infer_parent_groups(s: &mut Semantics, model: &AgentModel) {
             let chain = model.chain_between(base, tip).ok()?;
             let links = |j: &usize| model.links()[model.joints()[*j].child].name.as_str();
             let names: Vec<&str> = chain.joints.iter().map(links).collect();
-            let shares = chain
-                .joints
-                .iter()
-                .any(|j| own.contains(&&model.joints()[*j].name));
+            // Movable joints only: a gripper group given by its links brings their fixed
+            // parent joints, which the arm's group may list too (xArm's `joint_tcp`).
+            let shares = chain.joints.iter().any(|j| {
+                let joint = &model.joints()[*j];
+                joint.is_movable() && own.contains(&&joint.name)
+            });
             (g.name != e.group
                 && !shares
                 && (tip == &e.parent_link || names.contains(&e.parent_link.as_str())))
