@@ -954,3 +954,56 @@ fn a_finger_must_grip_what_the_hand_carries() {
         )]
     );
 }
+
+/// A hand must grip its object before it moves it: a lift whose finger reaches the book only at
+/// its end (the jaws closing as the book rises) is a `loose-grip` at its first frame where the
+/// book has moved; the same lift with the finger beside the book all along is clean.
+#[test]
+fn a_held_object_must_not_rise_in_open_jaws() {
+    let lift = |closed_from_the_start: bool| {
+        let mut plan = scene();
+        let heights = [0.77, 0.79, 0.82];
+        let frames = heights
+            .iter()
+            .enumerate()
+            .map(|(i, &z)| {
+                let mut moved = vec![("r_gripper_palm_link", [1.0, -0.2, z + 0.045])];
+                // Beside the book's -y face (1 mm), or 2 cm out until the last frame.
+                let y = if closed_from_the_start || i == 2 {
+                    -0.276
+                } else {
+                    -0.296
+                };
+                moved.push(("r_gripper_l_finger_link", [1.0, y, z]));
+                posture(BOT, &moved)
+            })
+            .collect();
+        let held = heights.iter().map(|&z| at(1.0, -0.2, z)).collect();
+        let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
+        let mut jt = joint_trajectory();
+        jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
+        traj["joint_trajectory"] = jt;
+        let end = json!({ "book": at(1.0, -0.2, 0.82) });
+        push_step(
+            &mut plan,
+            "pick",
+            "book",
+            vec![traj],
+            json!([]),
+            json!([]),
+            end,
+        );
+        check(&plan)
+    };
+    let r = lift(true);
+    assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
+    let r = lift(false);
+    let f = only(&r);
+    assert_eq!(f.kind, FaultKind::LooseGrip);
+    assert_eq!(f.frame.as_deref(), Some("1"));
+    assert!(
+        f.detail.contains("moved 20 mm") && f.detail.contains("open jaws"),
+        "{}",
+        f.detail
+    );
+}
