@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::rrt::{JointPath, RrtError, RrtStats};
 
-use super::Search;
+use super::{MotionFailure, Search};
 
 /// A stage of the search: the constraints a candidate passes, cheapest first, and the verdicts
 /// on a whole search that name no single candidate.
@@ -186,13 +186,14 @@ impl Search {
     /// in a row, also drops grasp choice `grasp`.
     pub(super) fn transfer_or_reject(
         &mut self,
-        r: Result<(JointPath, RrtStats), RrtError>,
+        r: Result<(JointPath, RrtStats), MotionFailure>,
         grasp: usize,
         what: impl FnOnce() -> String,
     ) -> Option<JointPath> {
         let failed = self.failed_transfers.entry(grasp).or_default();
         *failed = if r.is_ok() { 0 } else { *failed + 1 };
-        if matches!(r, Err(RrtError::InvalidStart)) || *failed >= MAX_FAILED_TRANSFERS {
+        let invalid_start = matches!(&r, Err(e) if e.error == RrtError::InvalidStart);
+        if invalid_start || *failed >= MAX_FAILED_TRANSFERS {
             self.failed_choices.insert(grasp);
         }
         self.or_reject(r.map(|(p, _)| p), Stage::Trajectory, what)

@@ -345,11 +345,18 @@ impl Search {
         from: &[f32],
         to: &[f32],
         rng: &mut fastrand::Rng,
-    ) -> Result<(JointPath, RrtStats), RrtError> {
+    ) -> Result<(JointPath, RrtStats), MotionFailure> {
         self.stats.planner_calls += 1;
         let planned = motion.plan(from, to, &self.rrt_params(), rng);
         self.note_rrt(&planned);
-        planned
+        planned.map_err(|error| {
+            let why = match error {
+                RrtError::InvalidStart => motion.collision(from),
+                RrtError::InvalidGoal => motion.collision(to),
+                _ => None,
+            };
+            MotionFailure { error, why }
+        })
     }
 
     /// Counts a trajectory query that used up its budget (node, check or time limit).
@@ -414,6 +421,23 @@ impl Search {
         self.human
             .map(|h| self.world.agent(h).name().to_string())
             .unwrap_or_default()
+    }
+}
+
+/// Why a trajectory query of a search failed: the planner's error and, where an end is in
+/// collision, what it collides with (a start posture inside the furniture says so).
+#[derive(Debug)]
+pub(crate) struct MotionFailure {
+    pub(crate) error: RrtError,
+    why: Option<String>,
+}
+
+impl std::fmt::Display for MotionFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.why {
+            Some(why) => write!(f, "{}: {why}", self.error),
+            None => write!(f, "{}", self.error),
+        }
     }
 }
 
