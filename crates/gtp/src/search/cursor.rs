@@ -184,6 +184,13 @@ impl Search {
                     self.object_name(),
                     self.rejections.last_reason
                 )
+            } else if let Some(start) = &self.rejections.start_reason {
+                format!(
+                    "no grasp of `{}` can be picked up ({} tried): no approach leaves the \
+                     arm's start posture ({start})",
+                    self.object_name(),
+                    self.choices.len(),
+                )
             } else {
                 format!(
                     "no grasp of `{}` can be picked up ({} tried; the last: {})",

@@ -137,6 +137,9 @@ pub(super) struct Rejections {
     pub(super) last_reason: String,
     /// The last reason a grasp could not be picked up.
     pub(super) pick_reason: String,
+    /// Why an arm's approach could not leave its start posture (in collision), where one
+    /// could not: every approach of that arm fails alike.
+    pub(super) start_reason: Option<String>,
     /// The best visibility a placement reached (the most for showing, the least for hiding).
     pub(super) best_visibility: Option<f32>,
 }

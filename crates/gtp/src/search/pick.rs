@@ -8,7 +8,7 @@ use std::sync::Arc;
 use parry3d::math::{Pose, Vector};
 
 use crate::robot::ArmMotion;
-use crate::rrt::JointPath;
+use crate::rrt::{JointPath, RrtError};
 use crate::solution::{Phase, Trajectory};
 
 use super::grasps::gripper_hits;
@@ -314,6 +314,9 @@ impl Search {
             }
             Err(e) => {
                 let oname = self.object_name();
+                if e.error == RrtError::InvalidStart {
+                    self.rejections.start_reason = Some(e.to_string());
+                }
                 self.reject(Stage::Trajectory, || {
                     format!("no collision-free approach to `{oname}`: {e}")
                 });
