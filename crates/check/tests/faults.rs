@@ -172,20 +172,20 @@ fn held_object_through_object() {
     assert!(f.depth_mm > 30.0, "{}", f.depth_mm);
 }
 
-/// A plan whose one step lifts the book from z 0.77 to 0.82 m held in the right hand, the
-/// robot's links `moved` as each frame's z gives them, the lift's trajectory changed by `more`.
+/// A plan whose one step lifts the book through `heights` (from z 0.77 m) held in the right
+/// hand, the robot's links `moved` as each frame's z gives them, the lift's trajectory changed
+/// by `more`.
 fn lift_book(
+    heights: &[f32],
     moved: impl Fn(f32) -> Vec<(&'static str, [f32; 3])>,
     more: impl FnOnce(&mut serde_json::Value),
 ) -> serde_json::Value {
     let mut plan = scene();
-    let frames = [0.77, 0.82]
-        .iter()
-        .map(|&z| posture(BOT, &moved(z)))
-        .collect();
-    let held = vec![at(1.0, -0.2, 0.77), at(1.0, -0.2, 0.82)];
+    let frames = heights.iter().map(|&z| posture(BOT, &moved(z))).collect();
+    let held = heights.iter().map(|&z| at(1.0, -0.2, z)).collect();
     let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
     more(&mut traj);
+    let last = heights.last().copied().unwrap_or(0.77);
     push_step(
         &mut plan,
         "pick",
@@ -193,7 +193,7 @@ fn lift_book(
         vec![traj],
         json!([]),
         json!([]),
-        json!({ "book": at(1.0, -0.2, 0.82) }),
+        json!({ "book": at(1.0, -0.2, last) }),
     );
     plan
 }
@@ -202,7 +202,7 @@ fn lift_book(
 fn a_hand_may_squeeze_what_it_holds_but_not_pass_through_it() {
     let lift = |palm_over_book: f32| {
         let palm = move |z: f32| vec![("r_gripper_palm_link", [1.0, -0.2, z + palm_over_book])];
-        check(&lift_book(palm, |_| {}))
+        check(&lift_book(&[0.77, 0.82], palm, |_| {}))
     };
     // The palm (half height 0.03) 0.045 m over the book's centre (half height 0.02): 5 mm in.
     let r = lift(0.045);
@@ -935,12 +935,7 @@ fn a_finger_must_grip_what_the_hand_carries() {
             }
             moved
         };
-        let gripper = |traj: &mut serde_json::Value| {
-            let mut jt = joint_trajectory();
-            jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
-            traj["joint_trajectory"] = jt;
-        };
-        check(&lift_book(hand, gripper))
+        check(&lift_book(&[0.77, 0.82], hand, declares_gripper))
     };
     let r = lift(true);
     assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
@@ -961,39 +956,19 @@ fn a_finger_must_grip_what_the_hand_carries() {
 #[test]
 fn a_held_object_must_not_rise_in_open_jaws() {
     let lift = |closed_from_the_start: bool| {
-        let mut plan = scene();
-        let heights = [0.77, 0.79, 0.82];
-        let frames = heights
-            .iter()
-            .enumerate()
-            .map(|(i, &z)| {
-                let mut moved = vec![("r_gripper_palm_link", [1.0, -0.2, z + 0.045])];
-                // Beside the book's -y face (1 mm), or 2 cm out until the last frame.
-                let y = if closed_from_the_start || i == 2 {
-                    -0.276
-                } else {
-                    -0.296
-                };
-                moved.push(("r_gripper_l_finger_link", [1.0, y, z]));
-                posture(BOT, &moved)
-            })
-            .collect();
-        let held = heights.iter().map(|&z| at(1.0, -0.2, z)).collect();
-        let mut traj = trajectory("bot", "lift", frames, Some(("book", held)));
-        let mut jt = joint_trajectory();
-        jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
-        traj["joint_trajectory"] = jt;
-        let end = json!({ "book": at(1.0, -0.2, 0.82) });
-        push_step(
-            &mut plan,
-            "pick",
-            "book",
-            vec![traj],
-            json!([]),
-            json!([]),
-            end,
-        );
-        check(&plan)
+        let hand = move |z: f32| {
+            // Beside the book's -y face (1 mm), or 2 cm out until the last frame.
+            let y = if closed_from_the_start || z >= 0.82 {
+                -0.276
+            } else {
+                -0.296
+            };
+            vec![
+                ("r_gripper_palm_link", [1.0, -0.2, z + 0.045]),
+                ("r_gripper_l_finger_link", [1.0, y, z]),
+            ]
+        };
+        check(&lift_book(&[0.77, 0.79, 0.82], hand, declares_gripper))
     };
     let r = lift(true);
     assert!(r.faults.is_empty(), "{:#?}", kinds(&r));
@@ -1006,4 +981,11 @@ fn a_held_object_must_not_rise_in_open_jaws() {
         "{}",
         f.detail
     );
+}
+
+/// Declares the right gripper's joint in a trajectory (a `joint_trajectory` of its own).
+fn declares_gripper(traj: &mut serde_json::Value) {
+    let mut jt = joint_trajectory();
+    jt["gripper_joint"] = json!("r_gripper_l_finger_joint");
+    traj["joint_trajectory"] = jt;
 }

@@ -323,23 +323,24 @@ impl VisualBodies {
         for a in world.agent_ids() {
             let info = world.agent(a);
             let poses = world.agent_state(a).link_poses();
-            let housing = match viewer {
-                Some(v) if v == a => info.model.rigid_links(info.eye_link),
-                _ => Vec::new(),
-            };
-            let eye = world.eye_pose(a).translation;
+            // The eye's housing: links fixed to the eye link whose visual mesh's box holds it.
+            let eye = viewer.filter(|&v| v == a).map(|_| {
+                (
+                    world.eye_pose(a).translation,
+                    info.model.rigid_links(info.eye_link),
+                )
+            });
             for (li, link) in info.model.links().iter().enumerate() {
-                let holds_eye = |v: &crate::agent::VisualMesh, shape: &SharedShape| {
+                let housed = eye.as_ref().is_some_and(|(eye, housing)| {
                     housing.contains(&li)
-                        && shape
-                            .compute_aabb(&(poses[li] * v.local_pose))
-                            .contains_local_point(eye)
-                };
-                if link
-                    .visuals
-                    .iter()
-                    .any(|v| visual_shape(&v.path, v.scale).is_ok_and(|s| holds_eye(v, &s)))
-                {
+                        && link.visuals.iter().any(|v| {
+                            visual_shape(&v.path, v.scale).is_ok_and(|s| {
+                                s.compute_aabb(&(poses[li] * v.local_pose))
+                                    .contains_local_point(*eye)
+                            })
+                        })
+                });
+                if housed {
                     continue;
                 }
                 let mut drawn = Vec::new();

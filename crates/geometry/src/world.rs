@@ -128,12 +128,7 @@ pub const CONTACT_TOLERANCE_M: f32 = 0.001;
 /// How deep two bodies interpenetrate, when more than [`CONTACT_TOLERANCE_M`] (bounding boxes
 /// first; shapes parry cannot compare are taken as apart).
 fn penetration(a: &Body<'_>, b: &Body<'_>) -> Option<f32> {
-    let (ba, bb) = (a.shape.compute_aabb(&a.pose), b.shape.compute_aabb(&b.pose));
-    if !ba.intersects(&bb) {
-        return None;
-    }
-    let c = parry3d::query::contact(&a.pose, &**a.shape, &b.pose, &**b.shape, 0.0).ok()??;
-    (-c.dist > CONTACT_TOLERANCE_M).then_some(-c.dist)
+    touching(a, b).filter(|&depth| depth > CONTACT_TOLERANCE_M)
 }
 
 /// How deep two bodies overlap where they touch at all (0 for touching): what the planner's

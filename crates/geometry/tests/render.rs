@@ -98,12 +98,18 @@ fn top_of_square() -> Camera {
     Camera::top(&area, 1.0)
 }
 
+/// A new folder `htngtp-visual-NAME-PID` for a test's files.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("htngtp-visual-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&root).unwrap();
+    root
+}
+
 /// A one-link robot whose collision is a 0.1 m box and whose visual is `visual` (a mesh file
 /// name), in a scene of its own; the world and the link's owner.
 fn one_link_robot(dir: &str, visual: &str) -> (World, BodyOwner) {
-    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("htngtp-visual-{dir}-{}", std::process::id()));
-    std::fs::create_dir_all(&root).unwrap();
+    let root = scratch(dir);
     std::fs::write(root.join("big.stl"), common::box_stl([0.2, 0.2, 0.2])).unwrap();
     std::fs::write(root.join("bad.stl"), b"solid x\nfacet normal 0 0 1\n").unwrap();
     std::fs::write(
@@ -206,9 +212,7 @@ fn an_unreadable_visual_mesh_falls_back_with_a_warning() {
 /// A robot whose eye sits inside the visual mesh of its head (a shell around the camera, as
 /// Baxter's screen is), a red box in front of it.
 fn robot_with_a_housed_eye() -> World {
-    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("htngtp-visual-housed-{}", std::process::id()));
-    std::fs::create_dir_all(&root).unwrap();
+    let root = scratch("housed");
     std::fs::write(root.join("head.stl"), common::box_stl([0.2, 0.2, 0.2])).unwrap();
     std::fs::write(
         root.join("bot.urdf"),

@@ -251,13 +251,11 @@ fn a_posture_may_be_a_list_of_group_states() {
     assert_ne!(one.agent_state(fetch).q, none.agent_state(fetch).q);
 }
 
-/// A robot whose base rests flush on its table (an arm bolted to a table top, `base.z` the
-/// table's height) is refused at load, naming both and saying what to do: the planner counts
-/// touching as a collision, so every motion of it would fail; a millimetre up, it loads.
-#[test]
-fn a_robot_base_touching_the_scene_is_refused_with_the_fix() {
+/// A folder `htngtp-NAME-PID` holding `arm.urdf`: a 0.2 m base box (its bottom at the base
+/// frame) and an upper link on one revolute joint.
+fn one_joint_arm(name: &str) -> PathBuf {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("htngtp-flush-base-{}", std::process::id()));
+        .join(format!("htngtp-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
         dir.join("arm.urdf"),
@@ -269,6 +267,15 @@ fn a_robot_base_touching_the_scene_is_refused_with_the_fix() {
 </robot>"#,
     )
     .unwrap();
+    dir
+}
+
+/// A robot whose base rests flush on its table (an arm bolted to a table top, `base.z` the
+/// table's height) is refused at load, naming both and saying what to do: the planner counts
+/// touching as a collision, so every motion of it would fail; a millimetre up, it loads.
+#[test]
+fn a_robot_base_touching_the_scene_is_refused_with_the_fix() {
+    let dir = one_joint_arm("flush-base");
     let scene = |z: &str| {
         format!(
             r#"
@@ -304,19 +311,7 @@ base = {{ x = 0, y = 0, yaw = 0, z = {z} }}
 /// naming the end effector and what to add, instead of asking for an end effector.
 #[test]
 fn an_end_effector_ending_no_arm_is_named() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("htngtp-orphan-hand-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("arm.urdf"),
-        r#"<robot name="arm">
-  <link name="base"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
-  <link name="upper"><collision><origin xyz="0 0 0.2"/><geometry><box size="0.05 0.05 0.2"/></geometry></collision></link>
-  <joint name="turn" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
-    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-</robot>"#,
-    )
-    .unwrap();
+    let dir = one_joint_arm("orphan-hand");
     std::fs::write(
         dir.join("arm.srdf"),
         r#"<robot name="arm">
